@@ -1,0 +1,187 @@
+#include "commands.h"
+
+#include <tbb/global_control.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <regex>
+
+#include "base/error.h"
+#include "base/file_io.h"
+#include "image/colormap.h"
+#include "image/image_io.h"
+#include "image/metrics.h"
+#include "render/frame_renderer.h"
+#include "scene/scene_loader.h"
+
+namespace freqlab {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::pair<int, int> parse_frame_range(const std::string& text, int frame_count) {
+    std::smatch m;
+    int a = 0, b = 0;
+    if (std::regex_match(text, m, std::regex(R"((\d+):(\d+))"))) {
+        a = std::stoi(m[1]), b = std::stoi(m[2]);
+    } else if (std::regex_match(text, m, std::regex(R"((\d+))"))) {
+        a = std::stoi(m[1]), b = a + 1;
+    } else {
+        throw Error("--frames", text, "expected A:B (frames A to B-1) or a single frame N");
+    }
+    if (b <= a) throw Error("--frames", text, "expected B > A in A:B");
+    if (b > frame_count)
+        throw Error("--frames", text,
+                    "the scene has " + std::to_string(frame_count) +
+                        " frames (0:" + std::to_string(frame_count) + ")");
+    return {a, b};
+}
+
+std::pair<int, int> parse_size(const std::string& text, const std::string& flag) {
+    std::smatch m;
+    if (!std::regex_match(text, m, std::regex(R"((\d{1,5})x(\d{1,5}))")))
+        throw Error(flag, text, "expected WIDTHxHEIGHT, e.g. 640x360");
+    const int w = std::stoi(m[1]), h = std::stoi(m[2]);
+    if (w < 1 || h < 1 || w > 16384 || h > 16384)
+        throw Error(flag, text, "expected sizes in [1, 16384]");
+    return {w, h};
+}
+
+namespace {
+
+std::pair<int, int> parse_pixel(const std::string& text, int w, int h) {
+    std::smatch m;
+    if (!std::regex_match(text, m, std::regex(R"((\d+),(\d+))")))
+        throw Error("--debug-pixel", text, "expected X,Y");
+    const int x = std::stoi(m[1]), y = std::stoi(m[2]);
+    if (x >= w || y >= h)
+        throw Error("--debug-pixel", text,
+                    "outside the image (" + std::to_string(w) + "x" + std::to_string(h) + ")");
+    return {x, y};
+}
+
+void print_debug_pixel(const FrameResult& r, const Scene& scene, int x, int y) {
+    std::printf("debug pixel (%d, %d), frame %d, t = %.4f s\n", x, y, r.frame, r.time_s);
+    for (const Layer& l : r.layers.layers()) {
+        std::printf("  %-10s [%s]", l.name.c_str(), to_string(l.kind));
+        for (int c = 0; c < l.channels; ++c) std::printf(" %.6g", l.at(r.layers.width(), x, y, c));
+        if (l.kind == LayerKind::Categorical) {
+            const int v = int(l.at(r.layers.width(), x, y));
+            if (v >= 0 && v < int(l.legend.size())) std::printf("  (%s)", l.legend[v].c_str());
+            if (v > 0 && v <= int(scene.objects.size())) {
+                const Material& m = scene.materials[scene.objects[v - 1].material];
+                std::printf("  material \"%s\" (%s)", m.name.c_str(), to_string(m.type));
+            }
+        }
+        std::printf("\n");
+    }
+}
+
+}  // namespace
+
+int run_render(const RenderArgs& args) {
+    RenderConfig config;
+    config.method = parse_render_method(args.method);
+    SettingsGroup settings = config.settings_group();
+    for (const std::string& s : args.sets) settings.apply_assignment(s);
+    if (!args.size.empty()) {
+        const auto [w, h] = parse_size(args.size, "--size");
+        config.frame.width = w, config.frame.height = h;
+    }
+    if (args.spp > 0)
+        settings.apply_assignment("gbuffer.aa_samples=" + std::to_string(args.spp), "--spp");
+    if (args.seed >= 0)
+        settings.apply_assignment("frame.seed=" + std::to_string(args.seed), "--seed");
+    if (args.out.empty()) throw Error("--out", "", "expected an output directory");
+
+    // Everything that can be wrong with the input is checked before any output exists.
+    const Scene scene = load_scene(args.scene);
+    const auto [first, last] = parse_frame_range(args.frames, scene.frame_count);
+    std::pair<int, int> debug{-1, -1};
+    if (!args.debug_pixel.empty())
+        debug = parse_pixel(args.debug_pixel, config.frame.width, config.frame.height);
+
+    std::unique_ptr<tbb::global_control> limit;
+    if (args.threads > 0)
+        limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                      size_t(args.threads));
+    EmbreeDevice device(args.threads);
+    FrameRenderer renderer(scene, config, device);
+
+    std::error_code ec;
+    fs::create_directories(args.out, ec);
+    if (ec || !fs::is_directory(args.out))
+        throw Error(args.out, "--out", "cannot create the output directory: " + ec.message());
+
+    json frames = json::array();
+    Progress progress;
+    progress.set_stage_count(last - first);
+    {
+        TerminalProgressBar bar(progress, !args.quiet && stderr_is_terminal());
+        for (int f = first; f < last; ++f) {
+            FrameResult r = renderer.render(f, progress);
+            if (r.stats["nonfinite"].get<long>() > 0)
+                std::fprintf(stderr,
+                             "\nwarning: frame %d has %ld non-finite values (shown magenta)\n", f,
+                             r.stats["nonfinite"].get<long>());
+            char name[32];
+            std::snprintf(name, sizeof name, "frame_%04d", f);
+            const json provenance = {{"freqlab", "0.1"},
+                                     {"scene", args.scene},
+                                     {"method", args.method},
+                                     {"frame", f},
+                                     {"time_s", r.time_s},
+                                     {"seed", config.frame.seed},
+                                     {"settings", settings.to_json()}};
+            write_exr(fs::path(args.out) / (std::string(name) + ".exr"), r.layers, provenance);
+            DisplayParams display;
+            display.exposure_ev = config.frame.exposure;
+            write_png(fs::path(args.out) / (std::string(name) + ".png"), r.layers.width(),
+                      r.layers.height(), layer_to_rgb8(r.layers, r.layers.get("color"), display));
+            if (debug.first >= 0) print_debug_pixel(r, scene, debug.first, debug.second);
+            frames.push_back(r.stats);
+        }
+    }
+    const json stats = {{"scene", args.scene},
+                        {"method", args.method},
+                        {"threads", args.threads},
+                        {"settings", settings.to_json()},
+                        {"frames", frames}};
+    write_text_atomically(fs::path(args.out) / "stats.json", stats.dump(2) + "\n");
+    if (!args.quiet)
+        std::fprintf(stderr, "wrote %d frame(s) to %s\n", last - first, args.out.c_str());
+    return 0;
+}
+
+int run_compare(const CompareArgs& args) {
+    const ExrFile test = read_exr(args.test);
+    const ExrFile ref = read_exr(args.ref);
+    ImageMetrics m;
+    try {
+        m = compare_layers(test.layers, ref.layers, args.layer);
+    } catch (const Error& e) {
+        throw Error(args.test + " vs " + args.ref, e.field(), e.message());
+    }
+    const json all = {{"rmse", m.rmse},
+                      {"relmse", m.relmse},
+                      {"ssim", m.ssim},
+                      {"max_abs", m.max_abs},
+                      {"nonfinite", m.nonfinite}};
+    json out = json::object();
+    std::stringstream ss(args.metrics);
+    std::string key;
+    while (std::getline(ss, key, ',')) {
+        if (!all.contains(key))
+            throw Error("--metrics", key,
+                        "unknown metric; expected rmse, relmse, ssim, max_abs, nonfinite");
+        out[key] = all[key];
+    }
+    out["nonfinite"] = m.nonfinite;  // always reported: NaN/Inf never pass silently
+    out["relmse_form"] = "mean((I-R)^2/(R+0.01)^2)";
+    out["layer"] = args.layer;
+    std::cout << out.dump(2) << std::endl;
+    return 0;
+}
+
+}  // namespace freqlab

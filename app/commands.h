@@ -1,0 +1,37 @@
+// The sub-commands of `freqlab` (DESIGN.md "Command line"). Each returns the process exit
+// code; errors are thrown as freqlab::Error and printed by main().
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace freqlab {
+
+struct RenderArgs {
+    std::string scene = "builtin:default";
+    std::string method = "gbuffer";
+    std::string frames = "0:1";  // A:B, half-open like a Python slice: frames A .. B-1
+    std::string size;            // WxH; empty keeps frame.width/height
+    int spp = 0;                 // 0 keeps the method's default
+    int seed = -1;               // -1 keeps frame.seed
+    int threads = 0;             // 0: all cores
+    std::vector<std::string> sets;
+    std::string debug_pixel;  // "X,Y"
+    bool quiet = false;
+    std::string out;
+};
+int run_render(const RenderArgs& args);
+
+struct CompareArgs {
+    std::string test, ref;
+    std::string metrics = "rmse,relmse,ssim,max_abs,nonfinite";
+    std::string layer = "color";
+};
+int run_compare(const CompareArgs& args);
+
+// Frames "A:B" → [A, B); "N" → [N, N+1). Throws Error naming --frames.
+std::pair<int, int> parse_frame_range(const std::string& text, int frame_count);
+// "WxH" → (W, H).
+std::pair<int, int> parse_size(const std::string& text, const std::string& flag);
+
+}  // namespace freqlab

@@ -1,0 +1,119 @@
+// freqlab: the workbench and its command line (DESIGN.md "Command line").
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+#include "base/error.h"
+#include "commands.h"
+#ifdef FREQLAB_HAS_UI
+#include "workbench.h"
+#endif
+
+namespace {
+
+int not_yet(const char* what) {
+    std::fprintf(stderr,
+                 "freqlab %s: not implemented yet — it lands with its issue (see "
+                 "`issues list`). Implemented: gui, render --method gbuffer, compare.\n",
+                 what);
+    return 2;
+}
+
+// No display: say so and take the headless route, naming the PNG it writes.
+int headless_fallback(const std::string& scene) {
+    const std::string out = "freqlab-out/" + std::filesystem::path(scene).stem().string();
+    std::fprintf(stderr,
+                 "freqlab: no display (DISPLAY is unset), so the workbench window cannot open.\n"
+                 "Rendering the headless route instead: %s/frame_0000.png\n"
+                 "(for a window, run under X or `xvfb-run -a freqlab`)\n",
+                 out.c_str());
+    freqlab::RenderArgs args;
+    args.scene = scene;
+    args.out = out;
+    return freqlab::run_render(args);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{"freqlab — a workbench for frequency-space light-transport caching"};
+    app.require_subcommand(0, 1);
+
+    std::string gui_scene = "builtin:default";
+    bool headless = false;
+    std::string screenshot, overlay, gui_size;
+    int gui_frame = 0;
+    auto* gui = app.add_subcommand("gui", "open the workbench (default: the built-in scene)");
+    gui->add_option("scene", gui_scene, "scene file or builtin:default");
+    gui->add_flag("--headless", headless, "render offscreen (OSMesa) without a display");
+    gui->add_option("--screenshot", screenshot, "write the workbench to this PNG and exit");
+    gui->add_option("--frame", gui_frame, "frame to show");
+    gui->add_option("--overlay", overlay, "layer to overlay");
+    gui->add_option("--size", gui_size, "window size WxH");
+
+    freqlab::RenderArgs r;
+    auto* render = app.add_subcommand("render", "render frames to EXR + PNG + stats.json");
+    render->add_option("scene", r.scene, "scene file or builtin:default")->required();
+    render->add_option("--method", r.method, "gbuffer|mis|reference|points|sparse|cache");
+    render->add_option("--frames", r.frames, "A:B renders frames A..B-1 (default 0:1)");
+    render->add_option("--size", r.size, "WxH");
+    render->add_option("--spp", r.spp, "samples per pixel of the method");
+    render->add_option("--seed", r.seed, "random seed");
+    render->add_option("--threads", r.threads, "worker threads (0 = all cores)");
+    render->add_option("--set", r.sets, "key=value setting (repeatable)");
+    render->add_option("--debug-pixel", r.debug_pixel, "X,Y: print this pixel's trace");
+    render->add_flag("--quiet", r.quiet, "no progress bar");
+    render->add_option("--out", r.out, "output directory")->required();
+
+    freqlab::CompareArgs c;
+    auto* compare = app.add_subcommand("compare", "error metrics of TEST against REF as JSON");
+    compare->add_option("test", c.test, "test EXR")->required();
+    compare->add_option("ref", c.ref, "reference EXR")->required();
+    compare->add_option("--metrics", c.metrics,
+                        "comma-separated: rmse,relmse,ssim,max_abs,nonfinite");
+    compare->add_option("--layer", c.layer, "layer to compare (default color)");
+
+    auto* tables =
+        app.add_subcommand("tables", "tabulate / query the impulse-response tables (to come)");
+    tables->allow_extras();
+    auto* bake = app.add_subcommand("bake", "lightmap / probe baking with media (to come)");
+    bake->allow_extras();
+    auto* bench = app.add_subcommand("bench", "time-vs-error study (to come)");
+    bench->allow_extras();
+
+    CLI11_PARSE(app, argc, argv);
+    try {
+        if (*render) return freqlab::run_render(r);
+        if (*compare) return freqlab::run_compare(c);
+        if (*tables) return not_yet("tables");
+        if (*bake) return not_yet("bake");
+        if (*bench) return not_yet("bench");
+        // `freqlab` alone, or `freqlab gui ...`
+        if (headless) return not_yet("gui --headless (OSMesa)");
+        const char* display = std::getenv("DISPLAY");
+        if (!display || !*display) return headless_fallback(gui_scene);
+#ifdef FREQLAB_HAS_UI
+        freqlab::ui::WorkbenchOptions options;
+        options.scene = gui_scene;
+        options.frame = gui_frame;
+        options.layer = overlay;
+        options.screenshot = screenshot;
+        if (!gui_size.empty()) {
+            const auto [w, h] = freqlab::parse_size(gui_size, "--size");
+            options.width = w, options.height = h;
+        }
+        return freqlab::ui::run_workbench(options);
+#else
+        std::fprintf(stderr, "freqlab was built without the UI (FREQLAB_BUILD_UI=OFF)\n");
+        return headless_fallback(gui_scene);
+#endif
+    } catch (const freqlab::Error& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return 1;
+    }
+}

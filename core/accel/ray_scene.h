@@ -1,0 +1,87 @@
+// Embree for freqlab: one device per process (thread count capped there), one instance per
+// scene object in a top-level scene. update(time) moves the instances of animated objects and
+// recommits only the top level; object BVHs are built once.
+//
+// Hit data comes back in world space: Embree reports Ng in the instanced object's space, so
+// normals are carried through the inverse transpose of the instance transform here, once.
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include <memory>
+#include <vector>
+
+#include "math/types.h"
+#include "scene/scene.h"
+
+namespace freqlab {
+
+class EmbreeDevice {
+  public:
+    explicit EmbreeDevice(int threads = 0);  // 0: Embree's default (all cores)
+    ~EmbreeDevice();
+    EmbreeDevice(const EmbreeDevice&) = delete;
+    EmbreeDevice& operator=(const EmbreeDevice&) = delete;
+    RTCDevice handle() const { return device_; }
+
+  private:
+    RTCDevice device_;
+};
+
+struct SurfaceHit {
+    bool valid = false;
+    float distance = 0.0f;
+    int object = -1;  // index into Scene::objects
+    int primitive = -1;
+    vec3 position{0.0f};
+    vec3 geometric_normal{0.0f};  // world, unit, facing the incoming ray
+    vec3 shading_normal{0.0f};    // world, unit, same hemisphere as geometric_normal
+    vec2 uv{0.0f};
+};
+
+struct Ray {
+    vec3 origin;
+    vec3 direction;  // unit
+    float tnear = 0.0f;
+    float tfar = INFINITY;
+};
+
+class RayScene {
+  public:
+    RayScene(const Scene& scene, const EmbreeDevice& device);
+    ~RayScene();
+    RayScene(const RayScene&) = delete;
+    RayScene& operator=(const RayScene&) = delete;
+
+    // Places every object at `time` (seconds). Static objects are placed once; the top level
+    // is recommitted only when something moved.
+    void update(float time);
+    float time() const { return time_; }
+
+    SurfaceHit intersect(const Ray& ray) const;
+    // Eight rays at once (an RTCRayHit8 packet); `active[i]` false skips lane i.
+    void intersect8(const Ray* rays, const bool* active, SurfaceHit* hits) const;
+    bool occluded(const Ray& ray) const;
+
+    const mat4& object_to_world(int object) const { return to_world_[object]; }
+    vec3 bounds_min() const { return bounds_min_; }
+    vec3 bounds_max() const { return bounds_max_; }
+    const Scene& scene() const { return scene_; }
+
+  private:
+    SurfaceHit make_hit(const Ray& ray, float t, unsigned inst, unsigned prim, vec3 ng_object,
+                        float u, float v) const;
+    void place(int object, float time);
+
+    const Scene& scene_;
+    RTCDevice device_;
+    RTCScene top_ = nullptr;
+    std::vector<RTCScene> object_scenes_;
+    std::vector<RTCGeometry> instances_;
+    std::vector<mat4> to_world_, normal_to_world_, to_object_;
+    float time_ = -1.0f;
+    bool committed_ = false;
+    vec3 bounds_min_{0.0f}, bounds_max_{0.0f};
+};
+
+}  // namespace freqlab

@@ -1,0 +1,45 @@
+#include "base/file_io.h"
+
+#include <unistd.h>
+#include <fstream>
+#include <sstream>
+
+#include "base/error.h"
+
+namespace freqlab {
+
+namespace fs = std::filesystem;
+
+void write_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+    // Keep the real extension last: image writers pick the format from it.
+    fs::path tmp = path;
+    tmp.replace_filename("." + path.stem().string() + ".tmp" + std::to_string(getpid()) +
+                         path.extension().string());
+    try {
+        write(tmp);
+        fs::rename(tmp, path);
+    } catch (...) {
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        throw;
+    }
+}
+
+void write_text_atomically(const fs::path& path, const std::string& text) {
+    write_atomically(path, [&](const fs::path& tmp) {
+        std::ofstream out(tmp, std::ios::binary);
+        out << text;
+        out.close();
+        if (!out) throw Error(path.string(), "", "could not write file");
+    });
+}
+
+std::string read_text_file(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(path.string(), "", "cannot open file (does it exist and is it readable?)");
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+}  // namespace freqlab

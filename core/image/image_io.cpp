@@ -1,0 +1,178 @@
+#include "image/image_io.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+#include <map>
+
+#include "base/error.h"
+#include "base/file_io.h"
+
+namespace freqlab {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+OIIO_NAMESPACE_USING
+
+namespace {
+
+json layer_table(const LayerSet& set) {
+    json table = json::array();
+    for (const Layer& l : set.layers()) {
+        json e = {{"name", l.name}, {"kind", to_string(l.kind)}, {"channels", l.channels}};
+        if (!l.description.empty()) e["description"] = l.description;
+        if (!l.legend.empty()) e["legend"] = l.legend;
+        table.push_back(e);
+    }
+    return table;
+}
+
+float srgb_to_linear(float c) {
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+}  // namespace
+
+void write_exr(const fs::path& path, const LayerSet& layers, const json& provenance) {
+    if (layers.layers().empty()) throw Error(path.string(), "", "no layers to write");
+    std::vector<std::string> names;
+    for (const Layer& l : layers.layers())
+        for (const std::string& n : l.channel_names()) names.push_back(n);
+    const int nch = int(names.size());
+    const size_t npix = layers.pixel_count();
+    std::vector<float> interleaved(npix * nch);
+    int base = 0;
+    for (const Layer& l : layers.layers()) {
+        for (size_t p = 0; p < npix; ++p)
+            for (int c = 0; c < l.channels; ++c)
+                interleaved[p * nch + base + c] = l.data[p * l.channels + c];
+        base += l.channels;
+    }
+    ImageSpec spec(layers.width(), layers.height(), nch, TypeDesc::FLOAT);
+    spec.channelnames = names;
+    spec.attribute("compression", "zip");
+    spec.attribute("freqlab:layers", layer_table(layers).dump());
+    spec.attribute("freqlab:provenance", provenance.dump());
+    // A fixed capture date keeps files byte-identical across runs (determinism tests compare
+    // bytes); the real wall-clock times live in stats.json.
+    spec.attribute("DateTime", "1970:01:01 00:00:00");
+    write_atomically(path, [&](const fs::path& tmp) {
+        auto out = ImageOutput::create(tmp.string());
+        if (!out || !out->open(tmp.string(), spec) ||
+            !out->write_image(TypeDesc::FLOAT, interleaved.data()) || !out->close())
+            throw Error(path.string(), "", "could not write EXR: " + OIIO::geterror());
+    });
+}
+
+ExrFile read_exr(const fs::path& path) {
+    auto in = ImageInput::open(path.string());
+    if (!in)
+        throw Error(
+            path.string(), "",
+            "cannot read image: " + OIIO::geterror() + " (expected a readable OpenEXR file)");
+    const ImageSpec spec = in->spec();
+    if (spec.width <= 0 || spec.height <= 0) throw Error(path.string(), "", "image has no pixels");
+    std::vector<float> pixels(size_t(spec.width) * spec.height * spec.nchannels);
+    if (!in->read_image(0, 0, 0, spec.nchannels, TypeDesc::FLOAT, pixels.data()))
+        throw Error(path.string(), "", "cannot read pixels: " + in->geterror());
+    in->close();
+
+    ExrFile file;
+    file.layers = LayerSet(spec.width, spec.height);
+    file.provenance = json::object();
+    const std::string prov = spec.get_string_attribute("freqlab:provenance");
+    if (!prov.empty()) file.provenance = json::parse(prov, nullptr, false);
+    if (file.provenance.is_discarded()) file.provenance = json::object();
+
+    std::map<std::string, int> channel_index;
+    for (int c = 0; c < spec.nchannels; ++c) channel_index[spec.channelnames[c]] = c;
+    auto copy_channels = [&](Layer& layer) {
+        const std::vector<std::string> names = layer.channel_names();
+        for (int c = 0; c < layer.channels; ++c) {
+            auto it = channel_index.find(names[c]);
+            if (it == channel_index.end())
+                throw Error(path.string(), "channel " + names[c],
+                            "missing although the freqlab:layers header lists it");
+            for (size_t p = 0; p < file.layers.pixel_count(); ++p)
+                layer.data[p * layer.channels + c] = pixels[p * spec.nchannels + it->second];
+        }
+    };
+
+    const json table =
+        json::parse(spec.get_string_attribute("freqlab:layers", "null"), nullptr, false);
+    if (table.is_array()) {
+        for (const json& e : table) {
+            Layer& l = file.layers.add(e.value("name", ""),
+                                       layer_kind_from_string(e.value("kind", "continuous")),
+                                       e.value("channels", 1), e.value("description", ""));
+            if (e.contains("legend")) l.legend = e["legend"].get<std::vector<std::string>>();
+            copy_channels(l);
+        }
+        return file;
+    }
+    // A foreign EXR: group channels by the text before the last '.', unprefixed ones = color.
+    std::vector<std::pair<std::string, std::vector<int>>> groups;
+    for (int c = 0; c < spec.nchannels; ++c) {
+        const std::string& n = spec.channelnames[c];
+        const size_t dot = n.rfind('.');
+        const std::string layer = dot == std::string::npos ? "color" : n.substr(0, dot);
+        auto it = std::find_if(groups.begin(), groups.end(),
+                               [&](const auto& g) { return g.first == layer; });
+        if (it == groups.end())
+            groups.push_back({layer, {c}});
+        else
+            it->second.push_back(c);
+    }
+    for (const auto& [name, chans] : groups) {
+        Layer& l = file.layers.add(
+            name, chans.size() >= 3 ? LayerKind::Color : LayerKind::Continuous, int(chans.size()));
+        for (size_t p = 0; p < file.layers.pixel_count(); ++p)
+            for (size_t c = 0; c < chans.size(); ++c)
+                l.data[p * l.channels + c] = pixels[p * spec.nchannels + chans[c]];
+    }
+    return file;
+}
+
+RgbImage read_rgb_image(const fs::path& path, bool require_finite) {
+    auto in = ImageInput::open(path.string());
+    if (!in) throw Error(path.string(), "", "cannot read image: " + OIIO::geterror());
+    const ImageSpec spec = in->spec();
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels < 1)
+        throw Error(path.string(), "", "image has no pixels");
+    std::vector<float> pixels(size_t(spec.width) * spec.height * spec.nchannels);
+    if (!in->read_image(0, 0, 0, spec.nchannels, TypeDesc::FLOAT, pixels.data()))
+        throw Error(path.string(), "", "cannot read pixels: " + in->geterror());
+    const bool srgb = spec.format.basetype == TypeDesc::UINT8 ||
+                      spec.get_string_attribute("oiio:ColorSpace") == "sRGB";
+    RgbImage img;
+    img.width = spec.width;
+    img.height = spec.height;
+    img.pixels.resize(size_t(spec.width) * spec.height);
+    for (size_t p = 0; p < img.pixels.size(); ++p) {
+        vec3 v;
+        for (int c = 0; c < 3; ++c) {
+            float x = pixels[p * spec.nchannels + std::min(c, spec.nchannels - 1)];
+            if (require_finite && !std::isfinite(x))
+                throw Error(path.string(),
+                            "pixel (" + std::to_string(p % spec.width) + ", " +
+                                std::to_string(p / spec.width) + ")",
+                            "non-finite value (NaN or Inf); expected finite radiance");
+            v[c] = srgb ? srgb_to_linear(x) : x;
+        }
+        img.pixels[p] = v;
+    }
+    return img;
+}
+
+void write_png(const fs::path& path, int width, int height,
+               const std::vector<unsigned char>& rgb8) {
+    ImageSpec spec(width, height, 3, TypeDesc::UINT8);
+    write_atomically(path, [&](const fs::path& tmp) {
+        auto out = ImageOutput::create(tmp.string());
+        if (!out || !out->open(tmp.string(), spec) ||
+            !out->write_image(TypeDesc::UINT8, rgb8.data()) || !out->close())
+            throw Error(path.string(), "", "could not write PNG: " + OIIO::geterror());
+    });
+}
+
+}  // namespace freqlab

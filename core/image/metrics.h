@@ -1,0 +1,32 @@
+// Image error metrics used by `freqlab compare`, the bench and the tests.
+//
+// | metric   | definition                                                                  |
+// |----------|-----------------------------------------------------------------------------|
+// | rmse     | sqrt(mean over pixels and RGB channels of (I - R)^2)                         |
+// | relmse   | mean over pixels and RGB channels of (I - R)^2 / (R + eps)^2, eps = 0.01     |
+// | ssim     | mean SSIM of luminance, 11x11 Gaussian window sigma = 1.5, K1 = 0.01,        |
+// |          | K2 = 0.03, dynamic range L = 1 (radiance is not clamped), valid region only |
+// | max_abs  | max |I - R| over pixels and channels                                         |
+// | nonfinite| number of NaN/Inf values in TEST (they are excluded from the sums above)     |
+#pragma once
+
+#include <string>
+
+#include "image/layers.h"
+
+namespace freqlab {
+
+struct ImageMetrics {
+    double rmse = 0, relmse = 0, ssim = 1, max_abs = 0;
+    long nonfinite = 0;
+};
+
+// Compares one layer of the same name in both sets (default `color`). Sizes must match; a
+// non-finite REF value is an error (a reference must be clean).
+ImageMetrics compare_layers(const LayerSet& test, const LayerSet& ref,
+                            const std::string& layer = "color", double relmse_eps = 0.01);
+
+// SSIM of two single-channel images of equal size (row-major).
+double ssim(const std::vector<float>& a, const std::vector<float>& b, int width, int height);
+
+}  // namespace freqlab

@@ -1,0 +1,27 @@
+// The vector types of freqlab: GLM, single precision for geometry and radiance.
+// World convention: right-handed, +z is up (the zenith of environment maps).
+#pragma once
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+namespace freqlab {
+
+using glm::ivec2;
+using glm::mat3;
+using glm::mat4;
+using glm::quat;
+using glm::uvec3;
+using glm::vec2;
+using glm::vec3;
+using glm::vec4;
+
+constexpr float kPi = 3.14159265358979323846f;
+constexpr float kInvPi = 0.31830988618379067154f;
+constexpr float kTwoPi = 6.28318530717958647692f;
+
+inline float luminance(const vec3& c) {
+    return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b;
+}
+
+}  // namespace freqlab

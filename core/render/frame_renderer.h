@@ -1,0 +1,54 @@
+// One frame of a render, whichever method: place the scene at the frame's time, run the
+// method's stages, and return the layers with per-frame stats (DESIGN.md "Stats").
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "accel/ray_scene.h"
+#include "base/job.h"
+#include "image/layers.h"
+#include "settings/render_settings.h"
+#include "settings/settings_group.h"
+
+namespace freqlab {
+
+enum class RenderMethod { GBuffer, Mis, Reference, Points, Sparse, Cache };
+const std::vector<std::string>& render_method_names();
+// Throws Error listing the methods; a known but unbuilt method says what it waits for.
+RenderMethod parse_render_method(const std::string& name);
+
+struct RenderConfig {
+    RenderMethod method = RenderMethod::GBuffer;
+    FrameSettings frame;
+    GBufferSettings gbuffer;
+    // All settings of this render under their "prefix.key" names (for --set, JSON, stats).
+    SettingsGroup settings_group();
+};
+
+struct FrameResult {
+    int frame = 0;
+    float time_s = 0.0f;
+    LayerSet layers;
+    nlohmann::json stats;  // frame, time_s, time_ms, stages, rays, pixels_*, nonfinite
+};
+
+class FrameRenderer {
+  public:
+    FrameRenderer(const Scene& scene, const RenderConfig& config, const EmbreeDevice& device);
+    FrameResult render(int frame, Progress& progress);
+    const RayScene& ray_scene() const { return ray_scene_; }
+
+  private:
+    const Scene& scene_;
+    RenderConfig config_;
+    RayScene ray_scene_;
+};
+
+// Counts NaN/Inf values over all layers (they are reported, never silently kept).
+long count_nonfinite(const LayerSet& layers);
+
+}  // namespace freqlab

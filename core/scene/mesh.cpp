@@ -1,0 +1,180 @@
+#include "scene/mesh.h"
+
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <assimp/Importer.hpp>
+#include <cmath>
+
+#include "base/error.h"
+
+namespace freqlab {
+
+vec3 TriangleMesh::bounds_min() const {
+    vec3 lo(INFINITY);
+    for (const vec3& p : positions) lo = glm::min(lo, p);
+    return lo;
+}
+
+vec3 TriangleMesh::bounds_max() const {
+    vec3 hi(-INFINITY);
+    for (const vec3& p : positions) hi = glm::max(hi, p);
+    return hi;
+}
+
+void clean_mesh(TriangleMesh& mesh, const std::string& origin, const std::string& field) {
+    for (size_t i = 0; i < mesh.positions.size(); ++i)
+        if (!std::isfinite(mesh.positions[i].x) || !std::isfinite(mesh.positions[i].y) ||
+            !std::isfinite(mesh.positions[i].z))
+            throw Error(origin, field, "vertex " + std::to_string(i) + " is not finite");
+    if (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size()) mesh.normals.clear();
+    if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size()) mesh.uvs.clear();
+    for (vec3& n : mesh.normals) {
+        const float len = glm::length(n);
+        n = std::isfinite(len) && len > 0 ? n / len : vec3(0.0f);
+    }
+    // Zero area relative to the mesh's size: |e1 x e2| below (1e-7 * extent)^2.
+    const vec3 extent = mesh.positions.empty() ? vec3(0.0f) : mesh.bounds_max() - mesh.bounds_min();
+    const float scale = std::max(extent.x, std::max(extent.y, extent.z));
+    const float min_area2 = std::pow(1e-7f * scale, 2.0f);
+    std::vector<uvec3> kept;
+    kept.reserve(mesh.triangles.size());
+    for (const uvec3& t : mesh.triangles) {
+        const size_t n = mesh.positions.size();
+        if (t.x >= n || t.y >= n || t.z >= n) continue;
+        const vec3 c = glm::cross(mesh.positions[t.y] - mesh.positions[t.x],
+                                  mesh.positions[t.z] - mesh.positions[t.x]);
+        if (!(glm::length(c) > min_area2)) continue;
+        kept.push_back(t);
+    }
+    mesh.degenerate_removed += mesh.triangles.size() - kept.size();
+    mesh.triangles.swap(kept);
+    if (mesh.triangles.empty())
+        throw Error(origin, field,
+                    "mesh has no usable triangles (" + std::to_string(mesh.degenerate_removed) +
+                        " degenerate or invalid ones were dropped); expected at least one "
+                        "triangle of non-zero area");
+}
+
+TriangleMesh make_plane(vec2 size, float uv_scale) {
+    TriangleMesh m;
+    const vec2 h = 0.5f * size;
+    m.positions = {{-h.x, -h.y, 0}, {h.x, -h.y, 0}, {h.x, h.y, 0}, {-h.x, h.y, 0}};
+    m.normals.assign(4, vec3(0, 0, 1));
+    // uv in world-ish units so a checker keeps its scale on any plane size.
+    m.uvs = {{0, 0},
+             {size.x * uv_scale, 0},
+             {size.x * uv_scale, size.y * uv_scale},
+             {0, size.y * uv_scale}};
+    m.triangles = {{0, 1, 2}, {0, 2, 3}};
+    return m;
+}
+
+TriangleMesh make_box(vec3 size) {
+    TriangleMesh m;
+    const vec3 h = 0.5f * size;
+    for (int axis = 0; axis < 3; ++axis)
+        for (int sign = -1; sign <= 1; sign += 2) {
+            vec3 n(0.0f);
+            n[axis] = float(sign);
+            const int a = (axis + 1) % 3, b = (axis + 2) % 3;
+            const uint32_t base = uint32_t(m.positions.size());
+            const vec2 corners[4] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+            for (const vec2& c : corners) {
+                vec3 p(0.0f);
+                p[axis] = sign * h[axis];
+                p[a] = c.x * h[a];
+                p[b] = c.y * h[b];
+                m.positions.push_back(p);
+                m.normals.push_back(n);
+                m.uvs.push_back(0.5f * (c + 1.0f));
+            }
+            if (sign > 0)
+                m.triangles.insert(m.triangles.end(),
+                                   {{base, base + 1, base + 2}, {base, base + 2, base + 3}});
+            else
+                m.triangles.insert(m.triangles.end(),
+                                   {{base, base + 2, base + 1}, {base, base + 3, base + 2}});
+        }
+    return m;
+}
+
+TriangleMesh make_disk(float radius, int segments) {
+    TriangleMesh m;
+    m.positions.push_back(vec3(0.0f));
+    m.uvs.push_back(vec2(0.5f));
+    for (int i = 0; i <= segments; ++i) {
+        const float phi = kTwoPi * i / segments;
+        m.positions.push_back(radius * vec3(std::cos(phi), std::sin(phi), 0.0f));
+        m.uvs.push_back(0.5f + 0.5f * vec2(std::cos(phi), std::sin(phi)));
+    }
+    m.normals.assign(m.positions.size(), vec3(0, 0, 1));
+    for (int i = 0; i < segments; ++i)
+        m.triangles.push_back({0u, uint32_t(i + 1), uint32_t(i + 2)});
+    return m;
+}
+
+TriangleMesh make_torus(float major, float minor, int segments, int sides) {
+    TriangleMesh m;
+    for (int i = 0; i <= segments; ++i) {
+        const float u = kTwoPi * i / segments;
+        for (int j = 0; j <= sides; ++j) {
+            const float v = kTwoPi * j / sides;
+            const vec3 centre(major * std::cos(u), major * std::sin(u), 0.0f);
+            const vec3 n(std::cos(v) * std::cos(u), std::cos(v) * std::sin(u), std::sin(v));
+            m.positions.push_back(centre + minor * n);
+            m.normals.push_back(n);
+            m.uvs.push_back(vec2(float(i) / segments, float(j) / sides));
+        }
+    }
+    for (int i = 0; i < segments; ++i)
+        for (int j = 0; j < sides; ++j) {
+            const uint32_t a = i * (sides + 1) + j, b = (i + 1) * (sides + 1) + j;
+            m.triangles.push_back({a, b, b + 1});
+            m.triangles.push_back({a, b + 1, a + 1});
+        }
+    return m;
+}
+
+TriangleMesh load_mesh_file(const std::filesystem::path& path, const std::string& origin,
+                            const std::string& field) {
+    Assimp::Importer importer;
+    const aiScene* scene = importer.ReadFile(
+        path.string(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                           aiProcess_GenSmoothNormals | aiProcess_PreTransformVertices |
+                           aiProcess_SortByPType);
+    if (!scene || !scene->mRootNode)
+        throw Error(origin, field,
+                    "cannot read mesh file " + path.string() + " (" + importer.GetErrorString() +
+                        "); expected a mesh file with at least one triangle");
+    TriangleMesh mesh;
+    for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
+        const aiMesh* am = scene->mMeshes[mi];
+        if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
+        const uint32_t base = uint32_t(mesh.positions.size());
+        const bool has_uv = am->HasTextureCoords(0);
+        for (unsigned v = 0; v < am->mNumVertices; ++v) {
+            const aiVector3D& p = am->mVertices[v];
+            mesh.positions.push_back(vec3(p.x, p.y, p.z));
+            mesh.normals.push_back(
+                am->HasNormals() ? vec3(am->mNormals[v].x, am->mNormals[v].y, am->mNormals[v].z)
+                                 : vec3(0.0f));
+            mesh.uvs.push_back(has_uv ? vec2(am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y)
+                                      : vec2(0.0f));
+        }
+        for (unsigned f = 0; f < am->mNumFaces; ++f) {
+            const aiFace& face = am->mFaces[f];
+            if (face.mNumIndices != 3) continue;
+            mesh.triangles.push_back(
+                {base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
+        }
+    }
+    if (mesh.triangles.empty())
+        throw Error(origin, field,
+                    "mesh file " + path.string() +
+                        " contains no triangles; expected a mesh file with at least one triangle");
+    clean_mesh(mesh, origin, field);
+    return mesh;
+}
+
+}  // namespace freqlab

@@ -1,0 +1,47 @@
+// The scene model: what a JSON scene file (or the built-in scene) describes. Loaded once,
+// immutable afterwards; per-frame state (transforms at time t) is evaluated on demand.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "scene/animation.h"
+#include "scene/camera.h"
+#include "scene/light.h"
+#include "scene/material.h"
+#include "scene/mesh.h"
+
+namespace freqlab {
+
+enum class ShapeKind { Mesh, Sphere };
+
+struct SceneObject {
+    std::string name;
+    ShapeKind shape = ShapeKind::Mesh;
+    std::shared_ptr<const TriangleMesh> mesh;  // Mesh
+    float sphere_radius = 1.0f;                // Sphere, centred at the local origin
+    int material = 0;                          // index into Scene::materials
+    Animation animation;
+};
+
+struct Scene {
+    std::string name;
+    std::string source;  // file path or "builtin:default"
+    float fps = 24.0f;
+    int frame_count = 1;
+    Camera camera;
+    std::vector<Material> materials;
+    std::vector<SceneObject> objects;
+    std::vector<Light> lights;
+    nlohmann::json media = nlohmann::json::array();  // reserved for method B
+
+    float time_of_frame(int frame) const { return float(frame) / fps; }
+    bool is_static() const;  // nothing moves: no object animation, static camera
+    // First environment-like light (envmap or sky): what camera rays that miss see.
+    vec3 background(const vec3& direction) const;
+};
+
+}  // namespace freqlab

@@ -1,0 +1,100 @@
+// Metrics on images with known answers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "base/error.h"
+#include "image/metrics.h"
+#include "math/rng.h"
+
+using namespace freqlab;
+
+namespace {
+
+LayerSet constant_image(int w, int h, float v) {
+    LayerSet s(w, h);
+    Layer& c = s.add("color", LayerKind::Color, 3);
+    for (float& x : c.data) x = v;
+    return s;
+}
+
+LayerSet smooth_image(int w, int h) {
+    LayerSet s(w, h);
+    Layer& c = s.add("color", LayerKind::Color, 3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int k = 0; k < 3; ++k)
+                c.at(w, x, y, k) = 0.5f + 0.4f * std::sin(0.1f * x + 0.07f * y + k);
+    return s;
+}
+
+}  // namespace
+
+TEST(Metrics, RmseOfConstantOffset) {
+    const LayerSet ref = smooth_image(64, 48);
+    LayerSet test = ref;
+    for (float& v : test.layers()[0].data) v += 0.25f;
+    const ImageMetrics m = compare_layers(test, ref);
+    EXPECT_NEAR(m.rmse, 0.25, 1e-6);
+    EXPECT_NEAR(m.max_abs, 0.25, 1e-6);
+    EXPECT_EQ(m.nonfinite, 0);
+}
+
+TEST(Metrics, RelMseHasTheStatedForm) {
+    const LayerSet ref = constant_image(16, 16, 0.49f);
+    const LayerSet test = constant_image(16, 16, 0.99f);
+    // (0.5)^2 / (0.49 + 0.01)^2 = 1
+    EXPECT_NEAR(compare_layers(test, ref).relmse, 1.0, 1e-5);
+}
+
+TEST(Metrics, SsimIsOneOnIdenticalImages) {
+    const LayerSet a = smooth_image(64, 48);
+    const ImageMetrics m = compare_layers(a, a);
+    EXPECT_NEAR(m.ssim, 1.0, 1e-9);
+    EXPECT_EQ(m.rmse, 0.0);
+}
+
+TEST(Metrics, SsimDropsWithNoise) {
+    const LayerSet ref = smooth_image(64, 48);
+    LayerSet weak = ref, strong = ref;
+    CounterRng rng(3, 0, 0, 0);
+    for (size_t i = 0; i < weak.layers()[0].data.size(); ++i) {
+        const float n = rng.next_float() - 0.5f;
+        weak.layers()[0].data[i] += 0.05f * n;
+        strong.layers()[0].data[i] += 0.5f * n;
+    }
+    const double s_weak = compare_layers(weak, ref).ssim,
+                 s_strong = compare_layers(strong, ref).ssim;
+    EXPECT_LT(s_weak, 0.999);
+    EXPECT_LT(s_strong, s_weak);
+    EXPECT_GT(s_strong, -1.0);
+}
+
+TEST(Metrics, SsimMatchesClosedFormForConstantImages) {
+    // Constant images: variances and covariance vanish, SSIM = (2ab + C1) / (a^2 + b^2 + C1).
+    const double a = 0.3, b = 0.6, c1 = 1e-4;
+    const double expected = (2 * a * b + c1) / (a * a + b * b + c1);
+    EXPECT_NEAR(
+        compare_layers(constant_image(32, 32, float(a)), constant_image(32, 32, float(b))).ssim,
+        expected, 1e-5);
+}
+
+TEST(Metrics, CountsNonFiniteInTestAndExcludesThem) {
+    const LayerSet ref = constant_image(8, 8, 0.5f);
+    LayerSet test = ref;
+    test.layers()[0].data[0] = NAN;
+    test.layers()[0].data[5] = INFINITY;
+    const ImageMetrics m = compare_layers(test, ref);
+    EXPECT_EQ(m.nonfinite, 2);
+    EXPECT_EQ(m.rmse, 0.0);
+}
+
+TEST(Metrics, MismatchedSizesAreAnError) {
+    try {
+        compare_layers(constant_image(8, 8, 0), constant_image(8, 9, 0));
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("8x8"), std::string::npos);
+        EXPECT_NE(std::string(e.what()).find("8x9"), std::string::npos);
+    }
+}

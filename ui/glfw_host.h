@@ -1,0 +1,25 @@
+// A real window: GLFW 3.3 with a GL 3.3 core context (needs an X display; see
+// shared/PLATFORM.md — GLFW 3.3 has no null platform).
+#pragma once
+
+#include "gl_host.h"
+
+struct GLFWwindow;
+
+namespace freqlab::ui {
+
+class GlfwHost : public GlHost {
+  public:
+    GlfwHost(int width, int height, const std::string& title);  // throws Error on failure
+    ~GlfwHost() override;
+    bool should_close() const override;
+    void begin_frame() override;
+    void end_frame() override;
+    void framebuffer_size(int* w, int* h) const override;
+    void set_title(const std::string& title) override;
+
+  private:
+    GLFWwindow* window_ = nullptr;
+};
+
+}  // namespace freqlab::ui

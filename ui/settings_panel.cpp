@@ -1,0 +1,67 @@
+#include "settings_panel.h"
+
+#include <imgui.h>
+
+#include <cmath>
+
+namespace freqlab::ui {
+
+namespace {
+
+uint32_t draw_field(const SettingsSchema& schema, const SettingField& f, void* object) {
+    const std::string label =
+        f.key + (f.unit.empty() ? "" : " (" + f.unit + ")") + "##" + schema.prefix() + "." + f.key;
+    const double before = f.get(object);
+    double after = before;
+    switch (f.type) {
+        case SettingType::Bool: {
+            bool v = before != 0;
+            if (ImGui::Checkbox(label.c_str(), &v)) after = v ? 1 : 0;
+            break;
+        }
+        case SettingType::Int: {
+            int v = int(before);
+            // Wide integer ranges (sizes, seeds) get a drag field rather than a slider.
+            const bool drag = f.max - f.min > 1000;
+            const bool changed =
+                drag ? ImGui::DragInt(label.c_str(), &v, 1.0f, int(f.min), int(f.max))
+                     : ImGui::SliderInt(label.c_str(), &v, int(f.min), int(f.max));
+            if (changed) after = std::clamp(double(v), f.min, f.max);
+            break;
+        }
+        case SettingType::Float: {
+            float v = float(before);
+            if (ImGui::SliderFloat(label.c_str(), &v, float(f.min), float(f.max)))
+                after = std::clamp(double(v), f.min, f.max);
+            break;
+        }
+        case SettingType::Choice: {
+            int v = int(before);
+            std::string items;
+            for (const std::string& c : f.choices) items += c + '\0';
+            if (ImGui::Combo(label.c_str(), &v, items.c_str())) after = v;
+            break;
+        }
+    }
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("%s\nchanging it invalidates: %s", f.tooltip.c_str(),
+                          invalidates_to_string(f.invalidates).c_str());
+    if (after == before) return 0;
+    schema.set_value(object, f, after, "gui", schema.prefix() + "." + f.key);
+    return f.invalidates;
+}
+
+}  // namespace
+
+uint32_t draw_settings(const SettingsGroup& group) {
+    uint32_t flags = 0;
+    for (const SettingsGroup::Binding& b : group.bindings()) {
+        if (!ImGui::CollapsingHeader(b.schema->title().c_str(), ImGuiTreeNodeFlags_DefaultOpen))
+            continue;
+        for (const SettingField& f : b.schema->fields())
+            flags |= draw_field(*b.schema, f, b.object);
+    }
+    return flags;
+}
+
+}  // namespace freqlab::ui
