@@ -1,5 +1,6 @@
 #include "accel/ray_scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -216,6 +217,30 @@ bool RayScene::occluded(const Ray& ray) const {
     r.flags = 0;
     rtcOccluded1(top_, &ctx, &r);
     return r.tfar < 0.0f;
+}
+
+void RayScene::occluded_stream(const Ray* rays, int count, bool* occluded) const {
+    constexpr int kChunk = 64;
+    RTCRay batch[kChunk];
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    for (int start = 0; start < count; start += kChunk) {
+        const int n = std::min(kChunk, count - start);
+        for (int i = 0; i < n; ++i) {
+            const Ray& ray = rays[start + i];
+            RTCRay& r = batch[i];
+            r.org_x = ray.origin.x, r.org_y = ray.origin.y, r.org_z = ray.origin.z;
+            r.dir_x = ray.direction.x, r.dir_y = ray.direction.y, r.dir_z = ray.direction.z;
+            r.tnear = ray.tnear;
+            r.tfar = ray.tfar;
+            r.time = 0.0f;
+            r.mask = ~0u;
+            r.id = unsigned(i);
+            r.flags = 0;
+        }
+        rtcOccluded1M(top_, &ctx, batch, unsigned(n), sizeof(RTCRay));
+        for (int i = 0; i < n; ++i) occluded[start + i] = batch[i].tfar < 0.0f;
+    }
 }
 
 }  // namespace freqlab

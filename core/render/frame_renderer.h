@@ -11,8 +11,10 @@
 #include "accel/ray_scene.h"
 #include "base/job.h"
 #include "image/layers.h"
+#include "render/reference_cache.h"
 #include "settings/render_settings.h"
 #include "settings/settings_group.h"
+#include "settings/shading_settings.h"
 
 namespace freqlab {
 
@@ -25,6 +27,10 @@ struct RenderConfig {
     RenderMethod method = RenderMethod::GBuffer;
     FrameSettings frame;
     GBufferSettings gbuffer;
+    ShadingSettings shading;
+    MisSettings mis;
+    ReferenceSettings reference;
+    int spp() const;  // the sample count of the chosen method (0 for gbuffer)
     // All settings of this render under their "prefix.key" names (for --set, JSON, stats).
     SettingsGroup settings_group();
 };
@@ -46,6 +52,7 @@ class FrameRenderer {
     const Scene& scene_;
     RenderConfig config_;
     RayScene ray_scene_;
+    ReferenceCache cache_;
 };
 
 // Counts NaN/Inf values over all layers (they are reported, never silently kept).

@@ -21,12 +21,73 @@ const char* to_string(LightType type) {
     return "?";
 }
 
-vec3 EnvironmentMap::eval(const vec3& d) const {
-    const float theta = std::acos(std::clamp(d.z, -1.0f, 1.0f));
-    float phi = std::atan2(d.y, d.x) - glm::radians(rotation_deg);
+EnvironmentMap::EnvironmentMap(std::string source, std::shared_ptr<const RgbImage> image,
+                               float rotation_deg, float scale)
+    : source_(std::move(source)),
+      image_(std::move(image)),
+      rotation_deg_(rotation_deg),
+      scale_(scale) {
+    const int w = image_->width, h = image_->height;
+    std::vector<float> weights(size_t(w) * h);
+    for (int y = 0; y < h; ++y) {
+        const float sin_theta = std::sin(kPi * (y + 0.5f) / h);
+        for (int x = 0; x < w; ++x) {
+            float m = 0.0f;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int yy = std::clamp(y + dy, 0, h - 1), xx = ((x + dx) % w + w) % w;
+                    m = std::max(m, luminance(image_->at(xx, yy)));
+                }
+            weights[size_t(y) * w + x] = m * sin_theta;
+        }
+    }
+    distribution_ = Distribution2D(weights, w, h);
+}
+
+vec2 EnvironmentMap::direction_to_uv(const vec3& d) const {
+    // atan2 rather than acos(z): acos loses theta's precision near the poles, where the
+    // solid-angle pdf divides by sin(theta).
+    const float theta = std::atan2(std::sqrt(d.x * d.x + d.y * d.y), d.z);
+    float phi = std::atan2(d.y, d.x) - glm::radians(rotation_deg_);
     phi -= kTwoPi * std::floor(phi / kTwoPi);
+    return vec2(phi / kTwoPi, theta / kPi);
+}
+
+vec3 EnvironmentMap::uv_to_direction(vec2 uv) const {
+    const float phi = kTwoPi * uv.x + glm::radians(rotation_deg_), theta = kPi * uv.y;
+    const float st = std::sin(theta);
+    return vec3(st * std::cos(phi), st * std::sin(phi), std::cos(theta));
+}
+
+vec3 EnvironmentMap::sample(vec2 u, vec3* direction, float* pdf) const {
+    float pdf_uv;
+    const vec2 uv = distribution_.sample(u, &pdf_uv);
+    *direction = uv_to_direction(uv);
+    const float sin_theta = std::sin(kPi * uv.y);
+    *pdf = sin_theta > 0 ? pdf_uv / (2.0f * kPi * kPi * sin_theta) : 0.0f;
+    return eval(*direction);
+}
+
+float EnvironmentMap::pdf(const vec3& d) const {
+    const vec2 uv = direction_to_uv(d);
+    const float sin_theta = std::sin(kPi * uv.y);
+    return sin_theta > 0 ? distribution_.pdf(uv) / (2.0f * kPi * kPi * sin_theta) : 0.0f;
+}
+
+std::shared_ptr<const RgbImage> constant_latlong(const vec3& radiance, int width, int height) {
+    auto img = std::make_shared<RgbImage>();
+    img->width = width;
+    img->height = height;
+    img->pixels.assign(size_t(width) * height, radiance);
+    return img;
+}
+
+vec3 EnvironmentMap::eval(const vec3& d) const {
+    const vec2 uv = direction_to_uv(d);
+    const RgbImage* image = image_.get();
+    const float scale = scale_;
     const int w = image->width, h = image->height;
-    const float x = phi / kTwoPi * w - 0.5f, y = theta / kPi * h - 0.5f;
+    const float x = uv.x * w - 0.5f, y = uv.y * h - 0.5f;
     const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
     const float fx = x - x0, fy = y - y0;
     auto texel = [&](int xi, int yi) {
@@ -36,6 +97,36 @@ vec3 EnvironmentMap::eval(const vec3& d) const {
     };
     return scale * glm::mix(glm::mix(texel(x0, y0), texel(x0 + 1, y0), fx),
                             glm::mix(texel(x0, y0 + 1), texel(x0 + 1, y0 + 1), fx), fy);
+}
+
+std::shared_ptr<const RgbImage> ProceduralSky::bake(int width, int height) const {
+    auto img = std::make_shared<RgbImage>();
+    img->width = width;
+    img->height = height;
+    img->pixels.resize(size_t(width) * height);
+    const float texel = kPi / height;
+    const float near_sun = std::cos(glm::radians(sun_angular_radius_deg) + 3.0f * texel);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            auto dir = [&](float fx, float fy) {
+                const float phi = kTwoPi * fx / width, theta = kPi * fy / height;
+                return vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                            std::cos(theta));
+            };
+            const vec3 centre = dir(x + 0.5f, y + 0.5f);
+            vec3 v(0.0f);
+            if (glm::dot(centre, sun_direction) > near_sun) {
+                const int n = 8;  // the sun disk is a few texels wide: average its coverage
+                for (int j = 0; j < n; ++j)
+                    for (int i = 0; i < n; ++i)
+                        v += eval(dir(x + (i + 0.5f) / n, y + (j + 0.5f) / n));
+                v /= float(n * n);
+            } else {
+                v = eval(centre);
+            }
+            img->pixels[size_t(y) * width + x] = v;
+        }
+    return img;
 }
 
 vec3 ProceduralSky::eval(const vec3& d) const {

@@ -8,18 +8,43 @@
 #include <string>
 
 #include "image/image_io.h"
+#include "math/distribution.h"
 #include "math/types.h"
 
 namespace freqlab {
 
-struct EnvironmentMap {
-    std::string source;  // file path, or "generated:..." for test maps
-    std::shared_ptr<const RgbImage> image;
-    float rotation_deg = 0.0f;  // about +z
-    float scale = 1.0f;
+// A lat-long map with importance sampling. The sampling density is piecewise constant over
+// texels, proportional to sin(theta) times the largest luminance in the texel's 3x3
+// neighbourhood: eval() interpolates bilinearly, so radiance leaks one texel around bright
+// ones and the density must stay positive wherever eval() is (MIS stays unbiased).
+class EnvironmentMap {
+  public:
+    EnvironmentMap(std::string source, std::shared_ptr<const RgbImage> image, float rotation_deg,
+                   float scale);
 
     vec3 eval(const vec3& direction) const;  // bilinear in the lat-long image
+    // Direction with density pdf (solid angle); returns the radiance there.
+    vec3 sample(vec2 u, vec3* direction, float* pdf) const;
+    float pdf(const vec3& direction) const;
+
+    const std::string& source() const { return source_; }
+    const RgbImage& image() const { return *image_; }
+    float rotation_deg() const { return rotation_deg_; }
+    float scale() const { return scale_; }
+    const Distribution2D& distribution() const { return distribution_; }
+    vec2 direction_to_uv(const vec3& d) const;
+    vec3 uv_to_direction(vec2 uv) const;
+
+  private:
+    std::string source_;
+    std::shared_ptr<const RgbImage> image_;
+    float rotation_deg_, scale_;
+    Distribution2D distribution_;
 };
+
+// A lat-long image of constant radiance (what "radiance" envmaps and tests use).
+std::shared_ptr<const RgbImage> constant_latlong(const vec3& radiance, int width = 32,
+                                                 int height = 16);
 
 struct ProceduralSky {
     vec3 sun_direction = glm::normalize(vec3(0.4f, -0.3f, 0.6f));
@@ -30,6 +55,8 @@ struct ProceduralSky {
     vec3 ground{0.25f, 0.22f, 0.2f};
 
     vec3 eval(const vec3& direction) const;
+    // The sky as a lat-long image; texels the sun touches are supersampled 8x8.
+    std::shared_ptr<const RgbImage> bake(int width, int height) const;
 };
 
 enum class LightType { Environment, Sky, Point, Directional, Quad };
@@ -41,8 +68,9 @@ struct Light {
     vec3 intensity{1.0f};      // Point: W/sr; Directional: irradiance; Quad: radiance
     vec3 direction{0, 0, -1};  // Directional: direction the light travels
     vec3 corner{0.0f}, edge_u{1, 0, 0}, edge_v{0, 1, 0};  // Quad, emits on edge_u x edge_v side
-    std::shared_ptr<const EnvironmentMap> environment;    // Environment
-    ProceduralSky sky;                                    // Sky
+    // Environment, and Sky (baked into a map so that both are sampled the same way).
+    std::shared_ptr<const EnvironmentMap> environment;
+    ProceduralSky sky;  // Sky: its parameters
 };
 
 }  // namespace freqlab

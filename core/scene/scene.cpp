@@ -2,6 +2,12 @@
 
 namespace freqlab {
 
+const EnvironmentMap* Scene::environment() const {
+    for (const Light& l : lights)
+        if (l.environment) return l.environment.get();
+    return nullptr;
+}
+
 bool Scene::is_static() const {
     if (!camera.is_static()) return false;
     for (const SceneObject& o : objects)
@@ -10,11 +16,8 @@ bool Scene::is_static() const {
 }
 
 vec3 Scene::background(const vec3& d) const {
-    for (const Light& l : lights) {
-        if (l.type == LightType::Environment) return l.environment->eval(d);
-        if (l.type == LightType::Sky) return l.sky.eval(d);
-    }
-    return vec3(0.0f);
+    const EnvironmentMap* env = environment();
+    return env ? env->eval(d) : vec3(0.0f);
 }
 
 }  // namespace freqlab

@@ -29,7 +29,8 @@ struct SceneObject {
 
 struct Scene {
     std::string name;
-    std::string source;  // file path or "builtin:default"
+    std::string source;         // file path or "builtin:default"
+    uint64_t content_hash = 0;  // FNV-1a of the scene text (assets are not hashed)
     float fps = 24.0f;
     int frame_count = 1;
     Camera camera;
@@ -40,7 +41,8 @@ struct Scene {
 
     float time_of_frame(int frame) const { return float(frame) / fps; }
     bool is_static() const;  // nothing moves: no object animation, static camera
-    // First environment-like light (envmap or sky): what camera rays that miss see.
+    // The environment-like light (envmap or baked sky), or null: what camera rays that miss see.
+    const EnvironmentMap* environment() const;
     vec3 background(const vec3& direction) const;
 };
 

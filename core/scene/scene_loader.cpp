@@ -9,6 +9,7 @@
 
 #include "base/error.h"
 #include "base/file_io.h"
+#include "base/hash.h"
 #include "scene/assets.h"
 #include "scene/json_reader.h"
 
@@ -237,17 +238,31 @@ Light read_light(const JsonReader& r, LoadContext& ctx) {
     const std::string type =
         r.get("type").one_of({"envmap", "sky", "point", "directional", "quad"});
     if (type == "envmap") {
-        r.only_keys({"type", "file", "rotation_deg", "scale"});
+        r.only_keys({"type", "file", "radiance", "rotation_deg", "scale"});
         l.type = LightType::Environment;
-        auto env = std::make_shared<EnvironmentMap>();
-        env->image = ctx.image(r.get("file"));
-        env->source = r.get("file").string();
-        env->rotation_deg = float(r.number_or("rotation_deg", 0.0, -1e6, 1e6));
-        env->scale = float(r.number_or("scale", 1.0, 0.0, 1e9));
-        l.environment = env;
+        if (r.has("file") == r.has("radiance"))
+            r.fail(
+                "expected exactly one of \"file\" (a lat-long EXR) or \"radiance\" (a constant)");
+        std::shared_ptr<const RgbImage> image;
+        std::string source;
+        if (r.has("file")) {
+            image = ctx.image(r.get("file"));
+            source = r.get("file").string();
+            if (image->width != 2 * image->height)
+                r.get("file").fail("expected a lat-long map with width = 2 x height, got " +
+                                   std::to_string(image->width) + "x" +
+                                   std::to_string(image->height));
+        } else {
+            const vec3 c = r.get("radiance").color();
+            image = constant_latlong(c);
+            source = "constant";
+        }
+        l.environment = std::make_shared<EnvironmentMap>(
+            source, image, float(r.number_or("rotation_deg", 0.0, -1e6, 1e6)),
+            float(r.number_or("scale", 1.0, 0.0, 1e9)));
     } else if (type == "sky") {
         r.only_keys({"type", "sun_direction", "sun_radius_deg", "sun_radiance", "zenith", "horizon",
-                     "ground"});
+                     "ground", "resolution"});
         l.type = LightType::Sky;
         if (r.has("sun_direction")) l.sky.sun_direction = r.get("sun_direction").direction();
         l.sky.sun_angular_radius_deg = float(r.number_or("sun_radius_deg", 0.53, 0.01, 45));
@@ -255,6 +270,9 @@ Light read_light(const JsonReader& r, LoadContext& ctx) {
         l.sky.zenith = r.color_or("zenith", l.sky.zenith);
         l.sky.horizon = r.color_or("horizon", l.sky.horizon);
         l.sky.ground = r.color_or("ground", l.sky.ground);
+        const int height = r.has("resolution") ? r.get("resolution").integer_in(8, 8192) : 1024;
+        l.environment =
+            std::make_shared<EnvironmentMap>("sky", l.sky.bake(2 * height, height), 0.0f, 1.0f);
     } else if (type == "point") {
         r.only_keys({"type", "position", "intensity"});
         l.type = LightType::Point;
@@ -288,6 +306,7 @@ Scene parse_scene(const std::string& text, const std::string& origin,
     LoadContext ctx{origin, scene_dir, {}};
     Scene scene;
     scene.source = origin;
+    scene.content_hash = fnv1a(text);
     scene.name = root.has("name") ? root.get("name").string() : fs::path(origin).stem().string();
     scene.fps = float(root.number_or("fps", 24.0, 1e-3, 1e4));
     scene.frame_count = root.has("frames") ? root.get("frames").integer_in(1, 1000000) : 1;

@@ -1,0 +1,185 @@
+#include "render/direct_lighting.h"
+
+#include <cmath>
+#include <vector>
+
+namespace freqlab {
+
+namespace {
+
+// Per-thread scratch so that shading a pixel allocates nothing after warm-up.
+struct Scratch {
+    std::vector<Ray> rays;
+    std::vector<vec3> contributions;
+    std::vector<int> unit;  // >= 0: environment unit; < 0: BRDF unit -(j + 1)
+    std::unique_ptr<bool[]> occluded;
+    size_t occluded_size = 0;
+    std::vector<vec3> env_units, brdf_units;
+};
+
+Scratch& scratch() {
+    thread_local Scratch s;
+    return s;
+}
+
+float max_abs_component(const vec3& p) {
+    return std::max(std::fabs(p.x), std::max(std::fabs(p.y), std::fabs(p.z)));
+}
+
+// Sample variance of the luminance of `units`, divided by their count (variance of the mean).
+float variance_of_mean(const std::vector<vec3>& units, int n) {
+    if (n < 2) return 0.0f;
+    double mean = 0, m2 = 0;
+    for (int i = 0; i < n; ++i) {
+        const double x = luminance(units[size_t(i)]);
+        const double d = x - mean;
+        mean += d / (i + 1);
+        m2 += d * (x - mean);
+    }
+    return float(m2 / (n - 1) / n);
+}
+
+}  // namespace
+
+DirectLighting::DirectLighting(const RayScene& scene, const ShadingSettings& settings)
+    : scene_(scene), environment_(scene.scene().environment()), settings_(settings) {
+    for (const Light& l : scene.scene().lights)
+        if (!l.environment) lights_.push_back(&l);
+}
+
+vec3 DirectLighting::offset_origin(const vec3& p, const vec3& n) const {
+    return p + n * (settings_.ray_epsilon * std::max(1.0f, max_abs_component(p)));
+}
+
+ShadingPoint DirectLighting::shading_point(const SurfaceHit& hit, const vec3& wo) const {
+    const Scene& scene = scene_.scene();
+    const Material& m = scene.materials[size_t(scene.objects[size_t(hit.object)].material)];
+    return ShadingPoint{hit.position, hit.geometric_normal, hit.shading_normal, wo,
+                        &m,           m.albedo.eval(hit.uv)};
+}
+
+RadianceEstimate DirectLighting::trace(const Ray& ray, int spp, CounterRng& rng, int depth) const {
+    const SurfaceHit hit = scene_.intersect(ray);
+    if (!hit.valid) {
+        RadianceEstimate e;
+        e.radiance = environment_ ? environment_->eval(ray.direction) : vec3(0.0f);
+        return e;
+    }
+    return shade_hit(hit, -ray.direction, spp, rng, depth);
+}
+
+RadianceEstimate DirectLighting::shade_hit(const SurfaceHit& hit, const vec3& wo, int spp,
+                                           CounterRng& rng, int depth) const {
+    const ShadingPoint sp = shading_point(hit, wo);
+    if (sp.material->type != BrdfType::Mirror) return estimate(sp, spp, rng);
+    RadianceEstimate e;
+    if (depth >= settings_.mirror_depth) return e;
+    const vec3 r = reflect_about(wo, sp.shading_normal);
+    if (glm::dot(r, sp.geometric_normal) <= 0.0f) return e;
+    e = trace(Ray{offset_origin(sp.position, sp.geometric_normal), r}, spp, rng, depth + 1);
+    e.radiance *= sp.albedo;
+    e.variance *= luminance(sp.albedo) * luminance(sp.albedo);
+    e.rays += 1;
+    return e;
+}
+
+RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, CounterRng& rng) const {
+    RadianceEstimate result;
+    const Brdf brdf(*sp.material, sp.albedo, sp.shading_normal);
+    const int n_env = (spp + 1) / 2;
+    const int n_brdf = environment_ ? spp / 2 : 0;  // BRDF rays only ever find the environment
+    const vec3 origin = offset_origin(sp.position, sp.geometric_normal);
+    const vec3& ng = sp.geometric_normal;
+    const vec3& ns = sp.shading_normal;
+
+    Scratch& s = scratch();
+    s.rays.clear();
+    s.contributions.clear();
+    s.unit.clear();
+    auto candidate = [&](const vec3& dir, float tfar, const vec3& value, int unit) {
+        if (!(luminance(value) > 0.0f) || glm::dot(dir, ng) <= 0.0f) return;
+        s.rays.push_back(Ray{origin, dir, 0.0f, tfar});
+        s.contributions.push_back(value);
+        s.unit.push_back(unit);
+    };
+
+    for (int i = 0; i < n_env; ++i) {
+        if (environment_) {
+            vec3 dir;
+            float pdf_env;
+            const vec3 le =
+                environment_->sample(vec2(rng.next_float(), rng.next_float()), &dir, &pdf_env);
+            const float cos_i = glm::dot(dir, ns);
+            if (pdf_env > 0.0f && cos_i > 0.0f) {
+                const float w =
+                    power_heuristic(float(n_env), pdf_env, float(n_brdf), brdf.pdf(sp.wo, dir));
+                candidate(dir, INFINITY, le * brdf.eval(sp.wo, dir) * (cos_i * w / pdf_env), i);
+            }
+        }
+        for (const Light* l : lights_) {
+            vec3 dir, value;
+            float dist = INFINITY;
+            if (l->type == LightType::Point) {
+                const vec3 d = l->position - sp.position;
+                dist = glm::length(d);
+                dir = d / dist;
+                value = l->intensity / (dist * dist);
+            } else if (l->type == LightType::Directional) {
+                dir = -l->direction;
+                value = l->intensity;
+            } else {  // Quad: uniform on the area, converted to solid angle
+                const float u1 = rng.next_float(), u2 = rng.next_float();
+                const vec3 q = l->corner + u1 * l->edge_u + u2 * l->edge_v;
+                const vec3 d = q - sp.position;
+                dist = glm::length(d);
+                dir = d / dist;
+                const vec3 cross = glm::cross(l->edge_u, l->edge_v);
+                const float area = glm::length(cross);
+                const float cos_l = -glm::dot(dir, cross / area);
+                if (cos_l <= 0.0f) continue;
+                value = l->intensity * (area * cos_l / (dist * dist));
+            }
+            const float cos_i = glm::dot(dir, ns);
+            if (cos_i <= 0.0f) continue;
+            const float tfar = std::isfinite(dist) ? dist * (1.0f - 1e-4f) : INFINITY;
+            candidate(dir, tfar, value * brdf.eval(sp.wo, dir) * cos_i, i);
+        }
+    }
+    for (int j = 0; j < n_brdf; ++j) {
+        const BrdfSample bs = brdf.sample(sp.wo, rng.next_float(), rng.next_float());
+        const float cos_i = glm::dot(bs.wi, ns);
+        if (bs.pdf <= 0.0f || cos_i <= 0.0f) continue;
+        const float w =
+            power_heuristic(float(n_brdf), bs.pdf, float(n_env), environment_->pdf(bs.wi));
+        candidate(bs.wi, INFINITY, environment_->eval(bs.wi) * bs.f * (cos_i * w / bs.pdf),
+                  -(j + 1));
+    }
+
+    const size_t n_rays = s.rays.size();
+    if (s.occluded_size < n_rays) {
+        s.occluded.reset(new bool[n_rays]);
+        s.occluded_size = n_rays;
+    }
+    scene_.occluded_stream(s.rays.data(), int(n_rays), s.occluded.get());
+    result.rays = long(n_rays);
+
+    s.env_units.assign(size_t(n_env), vec3(0.0f));
+    s.brdf_units.assign(size_t(n_brdf), vec3(0.0f));
+    for (size_t k = 0; k < n_rays; ++k) {
+        if (s.occluded[k]) continue;
+        const int u = s.unit[k];
+        if (u >= 0)
+            s.env_units[size_t(u)] += s.contributions[k];
+        else
+            s.brdf_units[size_t(-u - 1)] += s.contributions[k];
+    }
+    vec3 sum_env(0.0f), sum_brdf(0.0f);
+    for (const vec3& v : s.env_units) sum_env += v;
+    for (const vec3& v : s.brdf_units) sum_brdf += v;
+    result.radiance = (n_env ? sum_env / float(n_env) : vec3(0.0f)) +
+                      (n_brdf ? sum_brdf / float(n_brdf) : vec3(0.0f));
+    result.variance = variance_of_mean(s.env_units, n_env) + variance_of_mean(s.brdf_units, n_brdf);
+    return result;
+}
+
+}  // namespace freqlab

@@ -1,0 +1,65 @@
+// Direct lighting at a surface point: the Monte Carlo estimator of the reflection equation
+// (seed, Premier article §4, Eq. 4.1) with binary visibility through Embree occlusion rays,
+// used by the MIS baseline and the reference, and the estimator method A's radiance points
+// build on.
+//
+// | term                      | how it is estimated                                          |
+// |---------------------------|--------------------------------------------------------------|
+// | environment / sky         | n_env = ceil(N/2) samples from the map's pdf and n_brdf =    |
+// |                           | floor(N/2) from the BRDF's, power heuristic (Veach; seed §7) |
+// | point, directional lights | one deterministic shadow ray per environment sample unit     |
+// | quad area light           | one uniform area sample per environment sample unit (light   |
+// |                           | sampling only: BRDF rays do not see quads, so no MIS)        |
+// | perfect mirror            | Whitted recursion up to shading.mirror_depth, then black     |
+// | textures                  | the albedo at the hit scales the BRDF exactly                |
+//
+// The variance returned is that of the estimate (of its luminance): s²_env / n_env +
+// s²_brdf / n_brdf from the per-sample terms; 0 when a strategy has fewer than 2 samples.
+#pragma once
+
+#include "accel/ray_scene.h"
+#include "math/rng.h"
+#include "scene/brdf.h"
+#include "settings/shading_settings.h"
+
+namespace freqlab {
+
+struct RadianceEstimate {
+    vec3 radiance{0.0f};
+    float variance = 0.0f;  // of the luminance of `radiance`
+    long rays = 0;          // shadow + reflection rays cast
+};
+
+// A surface point to shade, in world space.
+struct ShadingPoint {
+    vec3 position;
+    vec3 geometric_normal;  // facing wo
+    vec3 shading_normal;
+    vec3 wo;  // unit, towards the viewer
+    const Material* material;
+    vec3 albedo;  // texture value at the point
+};
+
+class DirectLighting {
+  public:
+    DirectLighting(const RayScene& scene, const ShadingSettings& settings);
+
+    // Radiance along `ray` (towards its origin): the environment when it escapes, mirrors
+    // followed, and the direct-lighting estimate with `spp` samples at the first non-mirror hit.
+    RadianceEstimate trace(const Ray& ray, int spp, CounterRng& rng, int depth = 0) const;
+    RadianceEstimate shade_hit(const SurfaceHit& hit, const vec3& wo, int spp, CounterRng& rng,
+                               int depth = 0) const;
+    // The estimator at a point (no mirror handling): what trace() uses and tests call.
+    RadianceEstimate estimate(const ShadingPoint& point, int spp, CounterRng& rng) const;
+
+    ShadingPoint shading_point(const SurfaceHit& hit, const vec3& wo) const;
+    vec3 offset_origin(const vec3& p, const vec3& n) const;
+
+  private:
+    const RayScene& scene_;
+    const EnvironmentMap* environment_;
+    std::vector<const Light*> lights_;  // point, directional, quad
+    ShadingSettings settings_;
+};
+
+}  // namespace freqlab

@@ -1,0 +1,220 @@
+// Sampling routines against their own pdfs (Mitsuba-style chi-square tests), pdf
+// normalisation by quadrature, and MIS weights that sum to one.
+#include <gtest/gtest.h>
+
+#include <boost/math/quadrature/gauss.hpp>
+
+#include "math/rng.h"
+#include "math/sampling.h"
+#include "scene/brdf.h"
+#include "scene/light.h"
+#include "stats_helpers.h"
+
+using namespace freqlab;
+using boost::math::quadrature::gauss;
+
+namespace {
+
+vec3 spherical(double cos_theta, double phi) {
+    const double s = std::sqrt(std::max(0.0, 1.0 - cos_theta * cos_theta));
+    return vec3(float(s * std::cos(phi)), float(s * std::sin(phi)), float(cos_theta));
+}
+
+// Integral of f(direction) over a (cos theta, phi) rectangle: 20-point Gauss-Legendre in
+// each variable on each of sub x sub cells (the lobes tested are smooth at that scale).
+template <class F>
+double integrate_sphere(F f, double c0 = -1, double c1 = 1, double p0 = 0, double p1 = 2 * M_PI,
+                        int sub = 1) {
+    double total = 0;
+    for (int i = 0; i < sub; ++i)
+        for (int j = 0; j < sub; ++j) {
+            const double a0 = c0 + (c1 - c0) * i / sub, a1 = c0 + (c1 - c0) * (i + 1) / sub;
+            const double b0 = p0 + (p1 - p0) * j / sub, b1 = p0 + (p1 - p0) * (j + 1) / sub;
+            total += gauss<double, 20>::integrate(
+                [&](double c) {
+                    return gauss<double, 20>::integrate(
+                        [&](double phi) { return f(spherical(c, phi)); }, b0, b1);
+                },
+                a0, a1);
+        }
+    return total;
+}
+
+Material material(BrdfType type, float exponent = 1, float roughness = 0.5f) {
+    Material m;
+    m.type = type;
+    m.phong_exponent = exponent;
+    m.roughness = roughness;
+    return m;
+}
+
+struct BrdfCase {
+    const char* name;
+    Material m;
+    float view_theta_deg;
+};
+
+std::vector<BrdfCase> brdf_cases() {
+    return {{"lambert", material(BrdfType::Lambert), 30},
+            {"phong_e8", material(BrdfType::Phong, 8), 0},
+            {"phong_e40", material(BrdfType::Phong, 40), 50},
+            {"beckmann_0.2", material(BrdfType::Beckmann, 1, 0.2f), 30},
+            {"beckmann_0.7", material(BrdfType::Beckmann, 1, 0.7f), 70},
+            {"ggx_0.1", material(BrdfType::Ggx, 1, 0.1f), 10},
+            {"ggx_0.6", material(BrdfType::Ggx, 1, 0.6f), 60}};
+}
+
+vec3 view_direction(float theta_deg) {
+    const float t = glm::radians(theta_deg);
+    return vec3(std::sin(t), 0.0f, std::cos(t));
+}
+
+}  // namespace
+
+TEST(Sampling, BrdfSamplesFollowTheirPdf) {
+    const int cos_bins = 20, phi_bins = 40, n = 400000;
+    for (const BrdfCase& c : brdf_cases()) {
+        SCOPED_TRACE(c.name);
+        const Brdf brdf(c.m, vec3(1.0f), vec3(0, 0, 1));
+        const vec3 wo = view_direction(c.view_theta_deg);
+        std::vector<double> observed(size_t(cos_bins * phi_bins), 0.0), expected(observed.size());
+        CounterRng rng(11, 0, 0, 0);
+        for (int i = 0; i < n; ++i) {
+            const BrdfSample s = brdf.sample(wo, rng.next_float(), rng.next_float());
+            if (s.pdf <= 0) continue;
+            EXPECT_NEAR(s.pdf, brdf.pdf(wo, s.wi), 1e-3f * s.pdf);
+            const int ci = std::clamp(int((s.wi.z + 1.0f) * 0.5f * cos_bins), 0, cos_bins - 1);
+            double phi = std::atan2(s.wi.y, s.wi.x);
+            if (phi < 0) phi += 2 * M_PI;
+            const int pi = std::clamp(int(phi / (2 * M_PI) * phi_bins), 0, phi_bins - 1);
+            observed[size_t(ci * phi_bins + pi)] += 1;
+        }
+        for (int ci = 0; ci < cos_bins; ++ci)
+            for (int pi = 0; pi < phi_bins; ++pi) {
+                const double c0 = -1 + 2.0 * ci / cos_bins, c1 = -1 + 2.0 * (ci + 1) / cos_bins;
+                const double p0 = 2 * M_PI * pi / phi_bins, p1 = 2 * M_PI * (pi + 1) / phi_bins;
+                expected[size_t(ci * phi_bins + pi)] =
+                    n * integrate_sphere([&](const vec3& wi) { return double(brdf.pdf(wo, wi)); },
+                                         c0, c1, p0, p1);
+            }
+        double chi2;
+        const double p = test::chi_square_p_value(observed, expected, &chi2);
+        EXPECT_GT(p, 1e-3) << "chi2 = " << chi2;
+    }
+}
+
+TEST(Sampling, BrdfPdfsIntegrateToOne) {
+    // Microfacet sampling draws h ~ D(h) cos(theta_h) and reflects wo about it; when
+    // wo.h <= 0 the sample fails (pdf 0). So the pdf over directions integrates to 1 minus that
+    // failure mass, itself an integral over h; Lambert and Phong never fail.
+    for (const BrdfCase& c : brdf_cases()) {
+        SCOPED_TRACE(c.name);
+        const Brdf brdf(c.m, vec3(1.0f), vec3(0, 0, 1));
+        const vec3 wo = view_direction(c.view_theta_deg);
+        const double total = integrate_sphere(
+            [&](const vec3& wi) { return double(brdf.pdf(wo, wi)); }, -1, 1, 0, 2 * M_PI, 64);
+        double failure = 0;
+        if (c.m.type == BrdfType::Beckmann || c.m.type == BrdfType::Ggx) {
+            auto d = [&](float cos_h) {
+                return c.m.type == BrdfType::Ggx ? Brdf::ggx_d(cos_h, c.m.roughness)
+                                                 : Brdf::beckmann_d(cos_h, c.m.roughness);
+            };
+            const double d_norm = integrate_sphere(
+                [&](const vec3& h) { return double(d(h.z) * h.z); }, 0, 1, 0, 2 * M_PI, 64);
+            EXPECT_NEAR(d_norm, 1.0, 2e-3) << "projected microfacet area";
+            failure = integrate_sphere(
+                [&](const vec3& h) { return glm::dot(wo, h) <= 0 ? double(d(h.z) * h.z) : 0.0; }, 0,
+                1, 0, 2 * M_PI, 64);
+        }
+        EXPECT_NEAR(total + failure, 1.0, 2e-3) << "failure mass " << failure;
+    }
+}
+
+TEST(Sampling, MisWeightsSumToOne) {
+    CounterRng rng(5, 0, 0, 0);
+    for (int i = 0; i < 10000; ++i) {
+        const float pa = rng.next_float() * 10.0f, pb = rng.next_float() * 10.0f;
+        const float na = float(1 + i % 7), nb = float(1 + i % 5);
+        if (pa <= 0 || pb <= 0) continue;
+        EXPECT_NEAR(power_heuristic(na, pa, nb, pb) + power_heuristic(nb, pb, na, pa), 1.0f, 1e-6f);
+    }
+    EXPECT_EQ(power_heuristic(1, 0.0f, 1, 1.0f), 0.0f);  // a strategy that cannot sample it
+    EXPECT_EQ(power_heuristic(1, 1.0f, 1, 0.0f), 1.0f);
+}
+
+namespace {
+
+// A small non-uniform lat-long map: gradient, a bright spot, and a black region.
+std::shared_ptr<const RgbImage> test_map() {
+    auto img = std::make_shared<RgbImage>();
+    img->width = 32;
+    img->height = 16;
+    for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 32; ++x) {
+            float v = 0.2f + 0.05f * x;
+            if (x >= 20 && x < 23 && y >= 4 && y < 6) v = 40.0f;
+            if (y >= 12 && x < 8) v = 0.0f;
+            img->pixels.push_back(vec3(v, 0.5f * v, 0.25f * v));
+        }
+    return img;
+}
+
+}  // namespace
+
+TEST(Sampling, EnvironmentSamplesFollowTexelProbabilities) {
+    const EnvironmentMap env("test", test_map(), 37.0f, 1.0f);
+    const int n = 1000000;
+    const int w = env.distribution().width(), h = env.distribution().height();
+    std::vector<double> observed(size_t(w) * h, 0.0), expected(observed.size());
+    CounterRng rng(3, 0, 0, 0);
+    // The density jumps at texel edges, so a sample within float rounding of an edge may
+    // round-trip into the neighbour texel: allow a handful of such mismatches, no more.
+    int mismatches = 0;
+    for (int i = 0; i < n; ++i) {
+        vec3 d;
+        float pdf;
+        env.sample(vec2(rng.next_float(), rng.next_float()), &d, &pdf);
+        ASSERT_GT(pdf, 0.0f);
+        mismatches += std::fabs(pdf - env.pdf(d)) > 2e-3f * pdf;
+        const vec2 uv = env.direction_to_uv(d);
+        const int x = std::clamp(int(uv.x * w), 0, w - 1), y = std::clamp(int(uv.y * h), 0, h - 1);
+        observed[size_t(y) * w + x] += 1;
+    }
+    EXPECT_LE(mismatches, 10) << "sampled pdf disagrees with pdf(direction)";
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            expected[size_t(y) * w + x] = n * env.distribution().texel_probability(x, y);
+    double chi2;
+    EXPECT_GT(test::chi_square_p_value(observed, expected, &chi2), 1e-3) << "chi2 = " << chi2;
+}
+
+TEST(Sampling, EnvironmentPdfIntegratesToOneAndCoversTheRadiance) {
+    const EnvironmentMap env("test", test_map(), 37.0f, 1.0f);
+    // Piecewise constant in (u, v): integrate texel by texel over (theta, phi) with the
+    // solid-angle element sin(theta) dtheta dphi.
+    const int w = env.distribution().width(), h = env.distribution().height();
+    double total = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const double t0 = M_PI * y / h, t1 = M_PI * (y + 1) / h;
+            const double p0 = 2 * M_PI * x / w + glm::radians(37.0),
+                         p1 = 2 * M_PI * (x + 1) / w + glm::radians(37.0);
+            total += gauss<double, 7>::integrate(
+                [&](double t) {
+                    return std::sin(t) *
+                           gauss<double, 7>::integrate(
+                               [&](double phi) {
+                                   return double(env.pdf(spherical(std::cos(t), phi)));
+                               },
+                               p0, p1);
+                },
+                t0, t1);
+        }
+    EXPECT_NEAR(total, 1.0, 1e-4);
+    // Wherever eval() is positive the pdf is too (bilinear leakage is covered by dilation).
+    CounterRng rng(8, 0, 0, 0);
+    for (int i = 0; i < 200000; ++i) {
+        const vec3 d = sample_uniform_sphere(rng.next_float(), rng.next_float());
+        if (luminance(env.eval(d)) > 0.0f) ASSERT_GT(env.pdf(d), 0.0f);
+    }
+}
