@@ -173,7 +173,8 @@ TEST(Sampling, EnvironmentSamplesFollowTexelProbabilities) {
     for (int i = 0; i < n; ++i) {
         vec3 d;
         float pdf;
-        env.sample(vec2(rng.next_float(), rng.next_float()), &d, &pdf);
+        env.sample(vec4(rng.next_float(), rng.next_float(), rng.next_float(), rng.next_float()), &d,
+                   &pdf);
         ASSERT_GT(pdf, 0.0f);
         mismatches += std::fabs(pdf - env.pdf(d)) > 2e-3f * pdf;
         const vec2 uv = env.direction_to_uv(d);
@@ -211,7 +212,7 @@ TEST(Sampling, EnvironmentPdfIntegratesToOneAndCoversTheRadiance) {
                 t0, t1);
         }
     EXPECT_NEAR(total, 1.0, 1e-4);
-    // Wherever eval() is positive the pdf is too (bilinear leakage is covered by dilation).
+    // Wherever the lighting function is positive the pdf is too.
     CounterRng rng(8, 0, 0, 0);
     for (int i = 0; i < 200000; ++i) {
         const vec3 d = sample_uniform_sphere(rng.next_float(), rng.next_float());

@@ -127,6 +127,9 @@ SurfaceHit RayScene::make_hit(const Ray& ray, float t, unsigned inst, unsigned p
     h.primitive = int(prim);
     h.position = ray.origin + t * ray.direction;
     const SceneObject& obj = scene_.objects[inst];
+    h.material = obj.material;
+    if (!obj.group_material.empty() && !obj.mesh->triangle_group.empty())
+        h.material = obj.group_material[obj.mesh->triangle_group[prim]];
     const mat3 nm(normal_to_world_[inst]);
     vec3 ng = glm::normalize(nm * ng_object);
     vec3 ns = ng;

@@ -33,6 +33,7 @@ struct SurfaceHit {
     float distance = 0.0f;
     int object = -1;  // index into Scene::objects
     int primitive = -1;
+    int material = -1;  // index into Scene::materials (sub-mesh materials resolved)
     vec3 position{0.0f};
     vec3 geometric_normal{0.0f};  // world, unit, facing the incoming ray
     vec3 shading_normal{0.0f};    // world, unit, same hemisphere as geometric_normal
@@ -69,6 +70,7 @@ class RayScene {
     vec3 bounds_min() const { return bounds_min_; }
     vec3 bounds_max() const { return bounds_max_; }
     const Scene& scene() const { return scene_; }
+    RTCScene top_scene() const { return top_; }  // for benchmarks against bare Embree
 
   private:
     SurfaceHit make_hit(const Ray& ray, float t, unsigned inst, unsigned prim, vec3 ng_object,

@@ -33,35 +33,52 @@ float Distribution1D::sample(float u, float* pdf, int* index) const {
 
 Distribution2D::Distribution2D(const std::vector<float>& weights, int width, int height)
     : width_(width), height_(height) {
-    std::vector<float> row_integrals(static_cast<size_t>(height));
-    conditional_.reserve(size_t(height));
-    for (int y = 0; y < height; ++y) {
-        conditional_.emplace_back(&weights[size_t(y) * width], width);
-        // A row of zeros was made uniform by Distribution1D; its mass must still be zero.
-        float sum = 0;
-        for (int x = 0; x < width; ++x) sum += std::max(weights[size_t(y) * width + x], 0.0f);
-        row_integrals[size_t(y)] = sum / width;
+    const size_t n = size_t(width) * height;
+    double sum = 0.0;
+    for (size_t i = 0; i < n; ++i) sum += std::max(weights[i], 0.0f);
+    pdf_.resize(n);
+    alias_.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+        // All-zero weights: fall back to uniform rather than divide by zero.
+        pdf_[i] = sum > 0 ? float(std::max(weights[i], 0.0f) * double(n) / sum) : 1.0f;
+        alias_[i] = AliasEntry{1.0f, uint32_t(i)};
     }
-    marginal_ = Distribution1D(row_integrals.data(), height);
+    // Vose's construction on scaled probabilities p_i * n (mean 1).
+    std::vector<double> scaled(pdf_.begin(), pdf_.end());
+    std::vector<uint32_t> small, large;
+    for (size_t i = 0; i < n; ++i) (scaled[i] < 1.0 ? small : large).push_back(uint32_t(i));
+    while (!small.empty() && !large.empty()) {
+        const uint32_t s = small.back(), l = large.back();
+        small.pop_back();
+        alias_[s] = AliasEntry{float(scaled[s]), l};
+        scaled[l] = (scaled[l] + scaled[s]) - 1.0;
+        if (scaled[l] < 1.0) {
+            large.pop_back();
+            small.push_back(l);
+        }
+    }
+    // Leftovers are 1 up to rounding: they keep themselves (keep = 1 already).
 }
 
-vec2 Distribution2D::sample(vec2 u, float* pdf) const {
-    float pdf_row, pdf_col;
-    int row, col;
-    const float v = marginal_.sample(u.y, &pdf_row, &row);
-    const float x = conditional_[size_t(row)].sample(u.x, &pdf_col, &col);
-    *pdf = pdf_row * pdf_col;
-    return vec2(x, v);
+vec2 Distribution2D::sample(const vec4& u, float* pdf) const {
+    const size_t n = pdf_.size();
+    size_t i = std::min(size_t(u.x * float(n)), n - 1);
+    const AliasEntry& e = alias_[i];
+    if (u.y >= e.keep) i = e.alias;
+    *pdf = pdf_[i];
+    const int x = int(i % size_t(width_)), y = int(i / size_t(width_));
+    return vec2(std::min((x + u.z) / width_, 0x1.fffffep-1f),
+                std::min((y + u.w) / height_, 0x1.fffffep-1f));
 }
 
 float Distribution2D::pdf(vec2 uv) const {
     const int x = std::clamp(int(uv.x * width_), 0, width_ - 1);
     const int y = std::clamp(int(uv.y * height_), 0, height_ - 1);
-    return marginal_.pdf_of_bin(y) * conditional_[size_t(y)].pdf_of_bin(x);
+    return pdf_[size_t(y) * width_ + x];
 }
 
 double Distribution2D::texel_probability(int x, int y) const {
-    return double(marginal_.probability_of_bin(y)) * conditional_[size_t(y)].probability_of_bin(x);
+    return double(pdf_[size_t(y) * width_ + x]) / double(pdf_.size());
 }
 
 }  // namespace freqlab

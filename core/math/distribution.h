@@ -2,6 +2,7 @@
 // importance sampling. Built once per map; sampling is O(log n).
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "math/types.h"
@@ -28,14 +29,19 @@ class Distribution1D {
     float integral_ = 0.0f;
 };
 
-// Density over [0,1)^2 proportional to a width x height grid of weights (row 0 at v = 0).
+// Density over [0,1)^2 proportional to a width x height grid of weights (row 0 at v = 0),
+// sampled in O(1) with Walker/Vose alias tables: one table access per sample instead of two
+// binary searches, which matters when a sample costs tens of nanoseconds (profiled: the
+// searches were 18 % of the MIS integrator's time on rotor.json).
 class Distribution2D {
   public:
     Distribution2D() = default;
     Distribution2D(const std::vector<float>& weights, int width, int height);
 
-    vec2 sample(vec2 u, float* pdf) const;
+    // u.x picks the texel, u.y is the alias coin, (u.z, u.w) the position inside the texel.
+    vec2 sample(const vec4& u, float* pdf) const;
     float pdf(vec2 uv) const;
+    float texel_pdf(int index) const { return pdf_[size_t(index)]; }
     int width() const { return width_; }
     int height() const { return height_; }
     // Probability mass of texel (x, y): what a chi-square test compares counts against.
@@ -43,8 +49,12 @@ class Distribution2D {
 
   private:
     int width_ = 0, height_ = 0;
-    std::vector<Distribution1D> conditional_;  // one per row
-    Distribution1D marginal_;                  // over rows
+    struct AliasEntry {
+        float keep;      // probability of keeping texel i
+        uint32_t alias;  // the texel taken otherwise
+    };
+    std::vector<float> pdf_;         // density over [0,1)^2 of each texel
+    std::vector<AliasEntry> alias_;  // packed: one cache line per draw, not two
 };
 
 }  // namespace freqlab

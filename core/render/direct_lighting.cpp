@@ -53,7 +53,7 @@ vec3 DirectLighting::offset_origin(const vec3& p, const vec3& n) const {
 
 ShadingPoint DirectLighting::shading_point(const SurfaceHit& hit, const vec3& wo) const {
     const Scene& scene = scene_.scene();
-    const Material& m = scene.materials[size_t(scene.objects[size_t(hit.object)].material)];
+    const Material& m = scene.materials[size_t(hit.material)];
     return ShadingPoint{hit.position, hit.geometric_normal, hit.shading_normal, wo,
                         &m,           m.albedo.eval(hit.uv)};
 }
@@ -62,7 +62,7 @@ RadianceEstimate DirectLighting::trace(const Ray& ray, int spp, CounterRng& rng,
     const SurfaceHit hit = scene_.intersect(ray);
     if (!hit.valid) {
         RadianceEstimate e;
-        e.radiance = environment_ ? environment_->eval(ray.direction) : vec3(0.0f);
+        e.radiance = environment_ ? environment_->eval_smooth(ray.direction) : vec3(0.0f);
         return e;
     }
     return shade_hit(hit, -ray.direction, spp, rng, depth);
@@ -107,8 +107,8 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
         if (environment_) {
             vec3 dir;
             float pdf_env;
-            const vec3 le =
-                environment_->sample(vec2(rng.next_float(), rng.next_float()), &dir, &pdf_env);
+            const vec4 u(rng.next_float(), rng.next_float(), rng.next_float(), rng.next_float());
+            const vec3 le = environment_->sample(u, &dir, &pdf_env);
             const float cos_i = glm::dot(dir, ns);
             if (pdf_env > 0.0f && cos_i > 0.0f) {
                 const float w =
@@ -149,10 +149,10 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
         const BrdfSample bs = brdf.sample(sp.wo, rng.next_float(), rng.next_float());
         const float cos_i = glm::dot(bs.wi, ns);
         if (bs.pdf <= 0.0f || cos_i <= 0.0f) continue;
-        const float w =
-            power_heuristic(float(n_brdf), bs.pdf, float(n_env), environment_->pdf(bs.wi));
-        candidate(bs.wi, INFINITY, environment_->eval(bs.wi) * bs.f * (cos_i * w / bs.pdf),
-                  -(j + 1));
+        float pdf_env;
+        const vec3 le = environment_->eval_with_pdf(bs.wi, &pdf_env);
+        const float w = power_heuristic(float(n_brdf), bs.pdf, float(n_env), pdf_env);
+        candidate(bs.wi, INFINITY, le * bs.f * (cos_i * w / bs.pdf), -(j + 1));
     }
 
     const size_t n_rays = s.rays.size();
@@ -161,6 +161,7 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
         s.occluded_size = n_rays;
     }
     scene_.occluded_stream(s.rays.data(), int(n_rays), s.occluded.get());
+    if (recorded_) recorded_->insert(recorded_->end(), s.rays.begin(), s.rays.end());
     result.rays = long(n_rays);
 
     s.env_units.assign(size_t(n_env), vec3(0.0f));

@@ -53,6 +53,8 @@ class DirectLighting {
     RadianceEstimate estimate(const ShadingPoint& point, int spp, CounterRng& rng) const;
 
     ShadingPoint shading_point(const SurfaceHit& hit, const vec3& wo) const;
+    // Benchmarks only: every shadow ray cast is appended here (single-threaded use).
+    void record_rays(std::vector<Ray>* sink) { recorded_ = sink; }
     vec3 offset_origin(const vec3& p, const vec3& n) const;
 
   private:
@@ -60,6 +62,7 @@ class DirectLighting {
     const EnvironmentMap* environment_;
     std::vector<const Light*> lights_;  // point, directional, quad
     ShadingSettings settings_;
+    std::vector<Ray>* recorded_ = nullptr;
 };
 
 }  // namespace freqlab

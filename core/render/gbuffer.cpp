@@ -53,7 +53,7 @@ GBufferOutput render_gbuffer(const RayScene& rs, int frame, const FrameSettings&
             *alb = vec3(0.0f);
             return scene.background(dir);
         }
-        const Material& m = scene.materials[scene.objects[hit.object].material];
+        const Material& m = scene.materials[size_t(hit.material)];
         *alb = m.albedo.eval(hit.uv);
         return *alb * (0.2f + 0.8f * std::fabs(glm::dot(hit.shading_normal, dir)));
     };

@@ -28,20 +28,36 @@ EnvironmentMap::EnvironmentMap(std::string source, std::shared_ptr<const RgbImag
       rotation_deg_(rotation_deg),
       scale_(scale) {
     const int w = image_->width, h = image_->height;
+    texels_.resize(size_t(w) * h);
     std::vector<float> weights(size_t(w) * h);
     for (int y = 0; y < h; ++y) {
         const float sin_theta = std::sin(kPi * (y + 0.5f) / h);
         for (int x = 0; x < w; ++x) {
-            float m = 0.0f;
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    const int yy = std::clamp(y + dy, 0, h - 1), xx = ((x + dx) % w + w) % w;
-                    m = std::max(m, luminance(image_->at(xx, yy)));
-                }
-            weights[size_t(y) * w + x] = m * sin_theta;
+            const size_t i = size_t(y) * w + x;
+            texels_[i].radiance = glm::max(image_->pixels[i], vec3(0.0f)) * scale_;
+            weights[i] = luminance(texels_[i].radiance) * sin_theta;
         }
     }
     distribution_ = Distribution2D(weights, w, h);
+    for (size_t i = 0; i < texels_.size(); ++i) texels_[i].pdf_uv = distribution_.texel_pdf(int(i));
+}
+
+int EnvironmentMap::texel_index(vec2 uv) const {
+    const int w = image_->width, h = image_->height;
+    const int x = std::min(int(uv.x * w), w - 1), y = std::min(int(uv.y * h), h - 1);
+    return y * w + x;
+}
+
+vec3 EnvironmentMap::eval(const vec3& d) const {
+    return texels_[size_t(texel_index(direction_to_uv(d)))].radiance;
+}
+
+vec3 EnvironmentMap::eval_with_pdf(const vec3& d, float* pdf) const {
+    const vec2 uv = direction_to_uv(d);
+    const Texel& t = texels_[size_t(texel_index(uv))];
+    const float sin_theta = std::sin(kPi * uv.y);
+    *pdf = sin_theta > 0 ? t.pdf_uv / (2.0f * kPi * kPi * sin_theta) : 0.0f;
+    return t.radiance;
 }
 
 vec2 EnvironmentMap::direction_to_uv(const vec3& d) const {
@@ -59,13 +75,13 @@ vec3 EnvironmentMap::uv_to_direction(vec2 uv) const {
     return vec3(st * std::cos(phi), st * std::sin(phi), std::cos(theta));
 }
 
-vec3 EnvironmentMap::sample(vec2 u, vec3* direction, float* pdf) const {
+vec3 EnvironmentMap::sample(const vec4& u, vec3* direction, float* pdf) const {
     float pdf_uv;
     const vec2 uv = distribution_.sample(u, &pdf_uv);
     *direction = uv_to_direction(uv);
     const float sin_theta = std::sin(kPi * uv.y);
     *pdf = sin_theta > 0 ? pdf_uv / (2.0f * kPi * kPi * sin_theta) : 0.0f;
-    return eval(*direction);
+    return texels_[size_t(texel_index(uv))].radiance;
 }
 
 float EnvironmentMap::pdf(const vec3& d) const {
@@ -82,7 +98,7 @@ std::shared_ptr<const RgbImage> constant_latlong(const vec3& radiance, int width
     return img;
 }
 
-vec3 EnvironmentMap::eval(const vec3& d) const {
+vec3 EnvironmentMap::eval_smooth(const vec3& d) const {
     const vec2 uv = direction_to_uv(d);
     const RgbImage* image = image_.get();
     const float scale = scale_;

@@ -13,19 +13,26 @@
 
 namespace freqlab {
 
-// A lat-long map with importance sampling. The sampling density is piecewise constant over
-// texels, proportional to sin(theta) times the largest luminance in the texel's 3x3
-// neighbourhood: eval() interpolates bilinearly, so radiance leaks one texel around bright
-// ones and the density must stay positive wherever eval() is (MIS stays unbiased).
+// A lat-long map with importance sampling.
+//
+// The lighting function every integrator sees is the map as a piecewise-constant function
+// over texels (eval): the sampling density is then exactly luminance x sin(theta) per texel,
+// an environment sample's radiance is one texel read (no trigonometry), and estimator and
+// pdf agree exactly. What a camera or a mirror sees directly is interpolated bilinearly
+// (eval_smooth) so backgrounds do not look blocky; that radiance is not integrated.
+// Negative texels (some HDR files have them) are clamped to 0 on load.
 class EnvironmentMap {
   public:
     EnvironmentMap(std::string source, std::shared_ptr<const RgbImage> image, float rotation_deg,
                    float scale);
 
-    vec3 eval(const vec3& direction) const;  // bilinear in the lat-long image
-    // Direction with density pdf (solid angle); returns the radiance there.
-    vec3 sample(vec2 u, vec3* direction, float* pdf) const;
+    vec3 eval(const vec3& direction) const;         // the texel's radiance (lighting)
+    vec3 eval_smooth(const vec3& direction) const;  // bilinear (direct view)
+    // Direction with density pdf (solid angle) from 4 uniforms; returns the radiance there.
+    vec3 sample(const vec4& u, vec3* direction, float* pdf) const;
     float pdf(const vec3& direction) const;
+    // eval() and pdf() together (one direction-to-texel conversion).
+    vec3 eval_with_pdf(const vec3& direction, float* pdf) const;
 
     const std::string& source() const { return source_; }
     const RgbImage& image() const { return *image_; }
@@ -36,8 +43,14 @@ class EnvironmentMap {
     vec3 uv_to_direction(vec2 uv) const;
 
   private:
+    int texel_index(vec2 uv) const;
     std::string source_;
     std::shared_ptr<const RgbImage> image_;
+    struct Texel {
+        vec3 radiance;  // clamped and scaled
+        float pdf_uv;   // sampling density over [0,1)^2: read with the radiance, one miss
+    };
+    std::vector<Texel> texels_;
     float rotation_deg_, scale_;
     Distribution2D distribution_;
 };

@@ -3,6 +3,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <algorithm>
 #include <assimp/Importer.hpp>
 #include <cmath>
 
@@ -37,18 +38,24 @@ void clean_mesh(TriangleMesh& mesh, const std::string& origin, const std::string
     const vec3 extent = mesh.positions.empty() ? vec3(0.0f) : mesh.bounds_max() - mesh.bounds_min();
     const float scale = std::max(extent.x, std::max(extent.y, extent.z));
     const float min_area2 = std::pow(1e-7f * scale, 2.0f);
+    if (!mesh.triangle_group.empty() && mesh.triangle_group.size() != mesh.triangles.size())
+        mesh.triangle_group.clear();
     std::vector<uvec3> kept;
+    std::vector<uint16_t> kept_group;
     kept.reserve(mesh.triangles.size());
-    for (const uvec3& t : mesh.triangles) {
+    for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+        const uvec3& t = mesh.triangles[i];
         const size_t n = mesh.positions.size();
         if (t.x >= n || t.y >= n || t.z >= n) continue;
         const vec3 c = glm::cross(mesh.positions[t.y] - mesh.positions[t.x],
                                   mesh.positions[t.z] - mesh.positions[t.x]);
         if (!(glm::length(c) > min_area2)) continue;
         kept.push_back(t);
+        if (!mesh.triangle_group.empty()) kept_group.push_back(mesh.triangle_group[i]);
     }
     mesh.degenerate_removed += mesh.triangles.size() - kept.size();
     mesh.triangles.swap(kept);
+    if (!mesh.triangle_group.empty()) mesh.triangle_group.swap(kept_group);
     if (mesh.triangles.empty())
         throw Error(origin, field,
                     "mesh has no usable triangles (" + std::to_string(mesh.degenerate_removed) +
@@ -153,6 +160,13 @@ TriangleMesh load_mesh_file(const std::filesystem::path& path, const std::string
         if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
         const uint32_t base = uint32_t(mesh.positions.size());
         const bool has_uv = am->HasTextureCoords(0);
+        aiString material_name;
+        scene->mMaterials[am->mMaterialIndex]->Get(AI_MATKEY_NAME, material_name);
+        const std::string group =
+            material_name.length ? material_name.C_Str() : "mesh" + std::to_string(mi);
+        auto found = std::find(mesh.group_names.begin(), mesh.group_names.end(), group);
+        const uint16_t group_index = uint16_t(found - mesh.group_names.begin());
+        if (found == mesh.group_names.end()) mesh.group_names.push_back(group);
         for (unsigned v = 0; v < am->mNumVertices; ++v) {
             const aiVector3D& p = am->mVertices[v];
             mesh.positions.push_back(vec3(p.x, p.y, p.z));
@@ -167,6 +181,7 @@ TriangleMesh load_mesh_file(const std::filesystem::path& path, const std::string
             if (face.mNumIndices != 3) continue;
             mesh.triangles.push_back(
                 {base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
+            mesh.triangle_group.push_back(group_index);
         }
     }
     if (mesh.triangles.empty())

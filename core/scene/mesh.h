@@ -17,6 +17,9 @@ struct TriangleMesh {
     std::vector<vec3> normals;  // per vertex, may be empty (then the face normal is used)
     std::vector<vec2> uvs;      // per vertex, may be empty
     std::vector<uvec3> triangles;
+    // Sub-meshes of a file (assimp materials): triangle -> group, group -> its name there.
+    std::vector<uint16_t> triangle_group;  // empty: one group
+    std::vector<std::string> group_names;
     size_t degenerate_removed = 0;  // zero-area or out-of-range triangles dropped on load
 
     vec3 bounds_min() const;

@@ -17,7 +17,7 @@ bool Scene::is_static() const {
 
 vec3 Scene::background(const vec3& d) const {
     const EnvironmentMap* env = environment();
-    return env ? env->eval(d) : vec3(0.0f);
+    return env ? env->eval_smooth(d) : vec3(0.0f);
 }
 
 }  // namespace freqlab

@@ -24,6 +24,7 @@ struct SceneObject {
     std::shared_ptr<const TriangleMesh> mesh;  // Mesh
     float sphere_radius = 1.0f;                // Sphere, centred at the local origin
     int material = 0;                          // index into Scene::materials
+    std::vector<int> group_material;           // per mesh group (material_map); empty: `material`
     Animation animation;
 };
 

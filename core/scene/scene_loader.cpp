@@ -327,7 +327,8 @@ Scene parse_scene(const std::string& text, const std::string& origin,
     if (nobj == 0) objects.fail("expected at least one object");
     for (size_t i = 0; i < nobj; ++i) {
         const JsonReader o = objects.at(i);
-        o.only_keys({"name", "shape", "mesh", "material", "transform", "animation"});
+        o.only_keys(
+            {"name", "shape", "mesh", "material", "material_map", "transform", "animation"});
         SceneObject obj;
         obj.name = o.has("name") ? o.get("name").string() : "object" + std::to_string(i);
         if (o.has("shape") == o.has("mesh"))
