@@ -22,17 +22,32 @@ int not_yet(const char* what) {
 }
 
 // No display: say so and take the headless route, naming the PNG it writes.
-int headless_fallback(const std::string& scene) {
-    const std::string out = "freqlab-out/" + std::filesystem::path(scene).stem().string();
+int headless_fallback(const std::string& scene, int frame) {
+    const std::string stem = std::filesystem::path(scene).stem().string();
+#ifdef FREQLAB_HAS_UI
+    const std::string png = "freqlab-out/workbench_" + stem + ".png";
     std::fprintf(stderr,
                  "freqlab: no display (DISPLAY is unset), so the workbench window cannot open.\n"
-                 "Rendering the headless route instead: %s/frame_0000.png\n"
-                 "(for a window, run under X or `xvfb-run -a freqlab`)\n",
+                 "Rendering the workbench offscreen (OSMesa) instead: %s\n"
+                 "(for a window, run under X or `xvfb-run -a freqlab`; scripted: `freqlab gui "
+                 "SCENE --headless --screenshot OUT.png`)\n",
+                 png.c_str());
+    std::filesystem::create_directories("freqlab-out");
+    freqlab::ui::WorkbenchOptions options;
+    options.scene = scene;
+    options.frame = frame;
+    options.screenshot = png;
+    return freqlab::ui::run_headless(options);
+#else
+    const std::string out = "freqlab-out/" + stem;
+    std::fprintf(stderr,
+                 "freqlab: built without the UI and no display: rendering %s/frame_0000.png\n",
                  out.c_str());
     freqlab::RenderArgs args;
     args.scene = scene;
     args.out = out;
     return freqlab::run_render(args);
+#endif
 }
 
 }  // namespace
@@ -52,6 +67,10 @@ int main(int argc, char** argv) {
     gui->add_option("--frame", gui_frame, "frame to show");
     gui->add_option("--overlay", overlay, "layer to overlay");
     gui->add_option("--size", gui_size, "window size WxH");
+    std::string gui_method = "gbuffer";
+    std::vector<std::string> gui_sets;
+    gui->add_option("--method", gui_method, "gbuffer|mis|reference");
+    gui->add_option("--set", gui_sets, "key=value setting (repeatable)");
 
     freqlab::RenderArgs r;
     auto* render = app.add_subcommand("render", "render frames to EXR + PNG + stats.json");
@@ -90,24 +109,26 @@ int main(int argc, char** argv) {
         if (*tables) return not_yet("tables");
         if (*bake) return not_yet("bake");
         if (*bench) return not_yet("bench");
-        // `freqlab` alone, or `freqlab gui ...`
-        if (headless) return not_yet("gui --headless (OSMesa)");
-        const char* display = std::getenv("DISPLAY");
-        if (!display || !*display) return headless_fallback(gui_scene);
+            // `freqlab` alone, or `freqlab gui ...`
 #ifdef FREQLAB_HAS_UI
         freqlab::ui::WorkbenchOptions options;
         options.scene = gui_scene;
+        options.method = gui_method;
         options.frame = gui_frame;
         options.layer = overlay;
         options.screenshot = screenshot;
+        options.settings = gui_sets;
         if (!gui_size.empty()) {
             const auto [w, h] = freqlab::parse_size(gui_size, "--size");
             options.width = w, options.height = h;
         }
+        if (headless) return freqlab::ui::run_headless(options);
+        const char* display = std::getenv("DISPLAY");
+        if (!display || !*display) return headless_fallback(gui_scene, gui_frame);
         return freqlab::ui::run_workbench(options);
 #else
         std::fprintf(stderr, "freqlab was built without the UI (FREQLAB_BUILD_UI=OFF)\n");
-        return headless_fallback(gui_scene);
+        return headless_fallback(gui_scene, gui_frame);
 #endif
     } catch (const freqlab::Error& e) {
         std::fprintf(stderr, "error: %s\n", e.what());

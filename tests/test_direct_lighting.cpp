@@ -53,22 +53,16 @@ ShadingPoint lambert_point(const Scene& s, int object, vec3 p, vec3 n) {
     return ShadingPoint{p, n, n, n, &m, m.albedo.color};
 }
 
-// Sphere (radius 1, albedo 0.5) resting on a plane of 4e4 x 4e4 (2e4 radii each way),
-// constant environment radiance 1.
-const char* kSphereOnPlane = R"({
-  "camera": {"position": [0, -6, 2], "look_at": [0, 0, 1]},
-  "objects": [
-    {"name": "plane", "shape": {"type": "plane", "size": [40000, 40000]}, "material": {"type": "lambert", "albedo": 0.5}},
-    {"name": "sphere", "shape": {"type": "sphere", "radius": 1}, "material": {"type": "lambert", "albedo": 0.5},
-     "transform": {"translate": [0, 0, 1]}}
-  ],
-  "lights": [{"type": "envmap", "radiance": 1}]
-})";
+// scenes/analytic/sphere_on_plane.json: a sphere (radius 1, albedo 0.5) resting on a plane of
+// 4e4 x 4e4 (2e4 radii each way), constant environment radiance 1.
+Scene sphere_on_plane() {
+    return load_scene(FREQLAB_SOURCE_DIR "/scenes/analytic/sphere_on_plane.json");
+}
 
 }  // namespace
 
 TEST(DirectLighting, PlanePointNextToSphere) {
-    const Scene scene = parse_scene(kSphereOnPlane, "sphere_on_plane", "");
+    const Scene scene = sphere_on_plane();
     EmbreeDevice device(2);
     RayScene rs(scene, device);
     const DirectLighting lighting(rs, ShadingSettings{});
@@ -82,7 +76,7 @@ TEST(DirectLighting, PlanePointNextToSphere) {
 }
 
 TEST(DirectLighting, SpherePointSeesTheUpperHalfSpace) {
-    const Scene scene = parse_scene(kSphereOnPlane, "sphere_on_plane", "");
+    const Scene scene = sphere_on_plane();
     EmbreeDevice device(2);
     RayScene rs(scene, device);
     const DirectLighting lighting(rs, ShadingSettings{});

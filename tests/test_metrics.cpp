@@ -98,3 +98,26 @@ TEST(Metrics, MismatchedSizesAreAnError) {
         EXPECT_NE(std::string(e.what()).find("8x9"), std::string::npos);
     }
 }
+
+#include "image/colormap.h"
+
+TEST(Colormap, TicksAreNiceAndInsideTheRange) {
+    EXPECT_EQ(colorbar_ticks(0.0, 1.0), (std::vector<double>{0.0, 0.2, 0.4, 0.6, 0.8, 1.0}));
+    const std::vector<double> t = colorbar_ticks(-3.7, 12.2);
+    ASSERT_GE(t.size(), 3u);
+    EXPECT_DOUBLE_EQ(t.front(), 0.0);
+    for (size_t i = 0; i < t.size(); ++i) {
+        EXPECT_GE(t[i], -3.7);
+        EXPECT_LE(t[i], 12.2);
+        if (i) EXPECT_NEAR(t[i] - t[i - 1], 5.0, 1e-12);  // 1-2-5 steps: 5 here
+    }
+    EXPECT_EQ(colorbar_ticks(2.0, 2.0), (std::vector<double>{2.0, 2.0}));  // degenerate range
+}
+
+TEST(Colormap, KnownValues) {
+    // Endpoints of matplotlib's viridis, the middle of the diverging map is white-ish grey.
+    EXPECT_NEAR(viridis(0.0f).r, 0x44 / 255.0f, 1e-6f);
+    EXPECT_NEAR(viridis(1.0f).g, 0xe7 / 255.0f, 1e-6f);
+    EXPECT_NEAR(diverging(0.0f).r, 0xf7 / 255.0f, 1e-6f);
+    EXPECT_NEAR(categorical(11).r, categorical(1).r, 0.0f);  // the palette cycles
+}

@@ -1,8 +1,10 @@
 // Where GL frames come from. One small interface so the workbench does not care whether it
-// draws into a GLFW window (GLX) or, later, an offscreen OSMesa / EGL context.
+// draws into a GLFW window (GLX) or an offscreen OSMesa context (an EGL-surfaceless host can
+// be added behind the same interface when Mesa drops OSMesa; see shared/PLATFORM.md).
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace freqlab::ui {
 
@@ -10,10 +12,11 @@ class GlHost {
   public:
     virtual ~GlHost() = default;
     virtual bool should_close() const = 0;
-    virtual void begin_frame() = 0;  // poll events, start the ImGui platform frame
+    virtual void begin_frame() = 0;  // events / ImGui platform frame
     virtual void end_frame() = 0;    // present
     virtual void framebuffer_size(int* w, int* h) const = 0;
-    virtual void set_title(const std::string& title) = 0;
+    // The default framebuffer as RGB8, top row first (after drawing, before end_frame()).
+    std::vector<unsigned char> read_rgb() const;
 };
 
 }  // namespace freqlab::ui

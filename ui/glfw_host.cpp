@@ -59,8 +59,4 @@ void GlfwHost::framebuffer_size(int* w, int* h) const {
     glfwGetFramebufferSize(window_, w, h);
 }
 
-void GlfwHost::set_title(const std::string& title) {
-    glfwSetWindowTitle(window_, title.c_str());
-}
-
 }  // namespace freqlab::ui

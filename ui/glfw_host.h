@@ -16,7 +16,6 @@ class GlfwHost : public GlHost {
     void begin_frame() override;
     void end_frame() override;
     void framebuffer_size(int* w, int* h) const override;
-    void set_title(const std::string& title) override;
 
   private:
     GLFWwindow* window_ = nullptr;

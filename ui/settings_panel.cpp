@@ -31,7 +31,10 @@ uint32_t draw_field(const SettingsSchema& schema, const SettingField& f, void* o
         }
         case SettingType::Float: {
             float v = float(before);
-            if (ImGui::SliderFloat(label.c_str(), &v, float(f.min), float(f.max)))
+            // Ranges over decades (epsilons, exposures of spp) slide logarithmically.
+            const bool log_scale = f.min > 0 && f.max / f.min > 100;
+            if (ImGui::SliderFloat(label.c_str(), &v, float(f.min), float(f.max), "%.4g",
+                                   log_scale ? ImGuiSliderFlags_Logarithmic : 0))
                 after = std::clamp(double(v), f.min, f.max);
             break;
         }

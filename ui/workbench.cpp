@@ -5,327 +5,637 @@
 #include <imgui_impl_opengl3.h>
 
 #include <algorithm>
-#include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
-#include <memory>
 #include <mutex>
 
 #include "base/error.h"
+#include "base/file_io.h"
 #include "base/job.h"
+#include "gl_host.h"
 #include "glfw_host.h"
 #include "image/image_io.h"
-#include "layer_texture.h"
+#include "layer_view.h"
+#include "osmesa_host.h"
 #include "render/frame_renderer.h"
 #include "scene/scene_loader.h"
 #include "settings_panel.h"
 
 namespace freqlab::ui {
 
-namespace {
+namespace fs = std::filesystem;
 
-// Everything the workbench knows; the render job only touches `renderer` and `results`.
-struct WorkbenchState {
-    std::string scene_path;
+struct Workbench::State {
+    WorkbenchOptions options;
     Scene scene;
     RenderConfig config;
-    EmbreeDevice device;
+    std::unique_ptr<EmbreeDevice> device;
     std::unique_ptr<FrameRenderer> renderer;
     std::unique_ptr<Job> job;
     int job_frame = -1;
 
-    std::mutex results_mutex;
+    mutable std::mutex results_mutex;
     std::map<int, FrameResult> results;  // rendered frames: scrubbing back is instant
 
     int frame = 0;
     bool playing = false;
-    double play_clock = 0.0;
-    int layer_index = 0;
-    bool texture_dirty = true;
+    int play_ticks = 0;
+    std::string layer_name = "color";
+    bool overlay_on_color = false;
+    float overlay_opacity = 0.6f;
+    bool fixed_range = false;
+    DisplayRange range{0, 1};
+    int stat_index = 0;
+
+    LayerView view, base_view;  // shown layer; colour under an overlay
     int shown_frame = -1;
-    int inspect_x = -1, inspect_y = -1;
-    std::string error;
+    bool view_dirty = true;
+    DisplayRange shown_range;
+    const FrameResult* shown = nullptr;
+
+    float zoom = 1.0f;          // 1 = fit
+    ImVec2 centre{0.5f, 0.5f};  // uv at the viewport centre
+    int pick_x = -1, pick_y = -1;
+    ScreenRect image_rect, colorbar_rect;
+    std::vector<std::pair<std::string, ScreenRect>> legend;
+    std::string error, status;
 };
 
-void restart_renderer(WorkbenchState& s) {
+namespace {
+
+const char* kStats[] = {"time_ms", "rays", "pixels_shaded"};
+
+void restart_renderer(Workbench::State& s) {
     s.job.reset();  // cancels and joins
-    std::lock_guard<std::mutex> lock(s.results_mutex);
-    s.results.clear();
-    s.renderer = std::make_unique<FrameRenderer>(s.scene, s.config, s.device);
-    s.texture_dirty = true;
+    {
+        std::lock_guard<std::mutex> lock(s.results_mutex);
+        s.results.clear();
+    }
+    s.shown = nullptr;
+    s.shown_frame = -1;
+    s.error.clear();
+    if (s.device) s.renderer = std::make_unique<FrameRenderer>(s.scene, s.config, *s.device);
 }
 
-void start_job_if_needed(WorkbenchState& s) {
+void start_job_if_needed(Workbench::State& s) {
     if (s.job && !s.job->done()) return;
     if (s.job) {
         const ProgressSnapshot snap = s.job->snapshot();
         if (!snap.error.empty()) s.error = snap.error;
         s.job.reset();
     }
+    if (!s.renderer || !s.error.empty()) return;  // do not retry a failing render every frame
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
         if (s.results.count(s.frame)) return;
     }
-    if (!s.error.empty()) return;  // do not retry a failing render every frame
     const int frame = s.frame;
     s.job_frame = frame;
-    s.job = std::make_unique<Job>([&s, frame](Progress& progress) {
-        progress.set_stage_count(1);
-        FrameResult r = s.renderer->render(frame, progress);
-        std::lock_guard<std::mutex> lock(s.results_mutex);
-        s.results[frame] = std::move(r);
+    Workbench::State* sp = &s;
+    s.job = std::make_unique<Job>([sp, frame](Progress& progress) {
+        progress.set_stage_count(sp->config.method == RenderMethod::GBuffer ? 1 : 2);
+        FrameResult r = sp->renderer->render(frame, progress);
+        std::lock_guard<std::mutex> lock(sp->results_mutex);
+        sp->results[frame] = std::move(r);
     });
 }
 
-void draw_inspector(WorkbenchState& s, const FrameResult* result) {
-    ImGui::TextUnformatted("Pixel inspector");
-    ImGui::Separator();
-    if (!result || s.inspect_x < 0) {
-        ImGui::TextWrapped("Click a pixel in the viewport to see every layer's value there.");
-        return;
+ImU32 to_u32(const vec3& c) {
+    return ImGui::ColorConvertFloat4ToU32(ImVec4(c.r, c.g, c.b, 1.0f));
+}
+
+void draw_settings_panel(Workbench::State& s) {
+    ImGui::Text("scene: %s", s.scene.name.c_str());
+    int method = int(s.config.method);
+    const char* methods = "gbuffer\0mis\0reference\0";
+    if (ImGui::Combo("method", &method, methods) && method != int(s.config.method)) {
+        s.config.method = RenderMethod(method);
+        restart_renderer(s);
     }
-    const LayerSet& L = result->layers;
-    ImGui::Text("pixel (%d, %d), frame %d", s.inspect_x, s.inspect_y, result->frame);
-    for (const Layer& l : L.layers()) {
-        std::string values;
-        char buf[32];
-        for (int c = 0; c < l.channels; ++c) {
-            std::snprintf(buf, sizeof buf, "%s%.4g", c ? ", " : "",
-                          l.at(L.width(), s.inspect_x, s.inspect_y, c));
-            values += buf;
-        }
-        if (l.kind == LayerKind::Categorical) {
-            const int v = int(l.at(L.width(), s.inspect_x, s.inspect_y));
-            if (v >= 0 && v < int(l.legend.size())) values += "  " + l.legend[v];
-        }
-        ImGui::Text("%-9s %s", l.name.c_str(), values.c_str());
-        if (ImGui::IsItemHovered() && !l.description.empty())
-            ImGui::SetTooltip("%s", l.description.c_str());
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip(
+            "gbuffer: primary rays only; mis: MIS direct lighting at mis.spp; "
+            "reference: the same at reference.spp (cached on disk)");
+    SettingsGroup group = s.config.settings_group();
+    const uint32_t changed = draw_settings(group);
+    if (changed & (kInvalidatesGBuffer | kInvalidatesShading))
+        restart_renderer(s);
+    else if (changed & kInvalidatesDisplay)
+        s.view_dirty = true;
+
+    if (ImGui::CollapsingHeader("Help")) {
+        ImGui::TextWrapped(
+            "Space: play / pause    Left / Right: previous / next frame\n"
+            "Click the image: inspect that pixel    Wheel: zoom at the cursor\n"
+            "Right-drag: pan    F: fit the image    Export menu: PNG, EXR, CSV");
     }
 }
 
-void draw_timeline(WorkbenchState& s) {
+void draw_colorbar(Workbench::State& s, const Layer& layer, ImVec2 origin, float width) {
+    ImDrawList* dl = ImGui::GetWindowDrawList();
+    s.colorbar_rect = {};
+    s.legend.clear();
+    if (layer.kind == LayerKind::Color || layer.channels >= 3) return;
+    if (layer.kind == LayerKind::Categorical) {
+        float x = origin.x;
+        for (size_t i = 0; i < layer.legend.size(); ++i) {
+            const ImVec2 a(x, origin.y + 2), b(x + 14, origin.y + 16);
+            dl->AddRectFilled(a, b, to_u32(categorical(int(i))));
+            dl->AddText(ImVec2(x + 18, origin.y + 2), IM_COL32(230, 230, 230, 255),
+                        layer.legend[i].c_str());
+            s.legend.push_back({layer.legend[i], ScreenRect{a.x, a.y, b.x, b.y}});
+            x += 18 + ImGui::CalcTextSize(layer.legend[i].c_str()).x + 14;
+        }
+        ImGui::Dummy(ImVec2(width, 20));
+        return;
+    }
+    // Gradient in 128 steps drawn from the same colormap functions as the LUTs.
+    const int steps = 128;
+    const float h = 14;
+    const DisplayRange r = s.shown_range;
+    for (int i = 0; i < steps; ++i) {
+        const float t0 = float(i) / steps, t1 = float(i + 1) / steps;
+        const vec3 c0 = layer.kind == LayerKind::Signed ? diverging(2 * t0 - 1) : viridis(t0);
+        const vec3 c1 = layer.kind == LayerKind::Signed ? diverging(2 * t1 - 1) : viridis(t1);
+        dl->AddRectFilledMultiColor(ImVec2(origin.x + t0 * width, origin.y),
+                                    ImVec2(origin.x + t1 * width + 0.5f, origin.y + h), to_u32(c0),
+                                    to_u32(c1), to_u32(c1), to_u32(c0));
+    }
+    s.colorbar_rect = {origin.x, origin.y, origin.x + width, origin.y + h};
+    for (double t : colorbar_ticks(r.lo, r.hi)) {
+        const float x = origin.x + float((t - r.lo) / (r.hi - r.lo)) * width;
+        dl->AddLine(ImVec2(x, origin.y + h), ImVec2(x, origin.y + h + 5),
+                    IM_COL32(230, 230, 230, 255));
+        char label[32];
+        std::snprintf(label, sizeof label, "%g", t);
+        const float tw = ImGui::CalcTextSize(label).x;
+        dl->AddText(
+            ImVec2(std::clamp(x - tw / 2, origin.x, origin.x + width - tw), origin.y + h + 6),
+            IM_COL32(230, 230, 230, 255), label);
+    }
+    ImGui::Dummy(ImVec2(width, h + 24));
+}
+
+void export_current(Workbench::State& s, const char* what) {
+    if (!s.shown) return;
+    const fs::path dir = fs::path("freqlab-out") / "exports";
+    fs::create_directories(dir);
+    char stem[96];
+    std::snprintf(stem, sizeof stem, "%s_frame%04d_%s", s.scene.name.c_str(), s.shown->frame,
+                  s.layer_name.c_str());
+    try {
+        if (std::string(what) == "png") {
+            const std::vector<unsigned char> rgba = s.view.read_rgba();
+            std::vector<unsigned char> rgb(rgba.size() / 4 * 3);
+            for (size_t p = 0; p < rgba.size() / 4; ++p)
+                for (int c = 0; c < 3; ++c) rgb[3 * p + c] = rgba[4 * p + c];
+            write_png(dir / (std::string(stem) + ".png"), s.view.width(), s.view.height(), rgb);
+            s.status = "wrote " + (dir / (std::string(stem) + ".png")).string();
+        } else if (std::string(what) == "exr") {
+            write_exr(dir / (std::string(stem) + ".exr"), s.shown->layers,
+                      {{"scene", s.scene.source}, {"frame", s.shown->frame}});
+            s.status = "wrote " + (dir / (std::string(stem) + ".exr")).string();
+        } else {
+            std::string csv = "frame,time_ms,rays,pixels_shaded\n";
+            std::lock_guard<std::mutex> lock(s.results_mutex);
+            for (const auto& [f, r] : s.results)
+                csv += std::to_string(f) + "," + std::to_string(r.stats["time_ms"].get<double>()) +
+                       "," + std::to_string(r.stats["rays"].get<long>()) + "," +
+                       std::to_string(r.stats["pixels_shaded"].get<long>()) + "\n";
+            write_text_atomically(dir / (s.scene.name + "_stats.csv"), csv);
+            s.status = "wrote " + (dir / (s.scene.name + "_stats.csv")).string();
+        }
+    } catch (const Error& e) {
+        s.error = e.what();
+    }
+}
+
+void draw_viewport(Workbench::State& s) {
+    if (!s.error.empty()) {
+        ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1, 0.4f, 0.4f, 1));
+        ImGui::TextWrapped("error: %s", s.error.c_str());
+        ImGui::PopStyleColor();
+    }
+    s.image_rect = {};
+    if (!s.shown) {
+        ImGui::TextDisabled("rendering frame %d ...", s.frame);
+        return;
+    }
+    const LayerSet& L = s.shown->layers;
+    ImGui::SetNextItemWidth(180);
+    if (ImGui::BeginCombo("layer", s.layer_name.c_str())) {
+        for (const Layer& l : L.layers())
+            if (ImGui::Selectable(l.name.c_str(), l.name == s.layer_name)) {
+                s.layer_name = l.name;
+                s.view_dirty = true;
+            }
+        ImGui::EndCombo();
+    }
+    const Layer* layer = L.find(s.layer_name);
+    if (!layer) {
+        s.layer_name = "color";
+        layer = &L.get("color");
+        s.view_dirty = true;
+    }
+    ImGui::SameLine();
+    ImGui::TextDisabled("[%s] %s", to_string(layer->kind), layer->description.c_str());
+    if (layer->kind != LayerKind::Color) {
+        if (ImGui::Checkbox("over colour", &s.overlay_on_color)) s.view_dirty = true;
+        ImGui::SameLine();
+        ImGui::SetNextItemWidth(100);
+        ImGui::SliderFloat("opacity", &s.overlay_opacity, 0.0f, 1.0f);
+        ImGui::SameLine();
+        if (ImGui::Checkbox("fixed range", &s.fixed_range)) s.view_dirty = true;
+        if (s.fixed_range) {
+            ImGui::SameLine();
+            ImGui::SetNextItemWidth(140);
+            if (ImGui::InputFloat2("range", &s.range.lo)) s.view_dirty = true;
+        }
+    }
+    if (s.view_dirty) {
+        DisplayParams params;
+        params.exposure_ev = s.config.frame.exposure;
+        params.auto_range = !s.fixed_range;
+        params.range = s.range;
+        s.shown_range = s.view.render(L, *layer, params);
+        if (!s.fixed_range) s.range = s.shown_range;
+        if (s.overlay_on_color && layer->kind != LayerKind::Color)
+            s.base_view.render(L, L.get("color"), params);
+        s.view_dirty = false;
+    }
+
+    const ImVec2 avail = ImGui::GetContentRegionAvail();
+    const float colorbar_h = (layer->kind == LayerKind::Color || layer->channels >= 3) ? 0 : 44;
+    const float fit = std::min(avail.x / L.width(), (avail.y - colorbar_h) / L.height());
+    const ImVec2 size(L.width() * fit, L.height() * fit);
+    const float half = 0.5f / s.zoom;
+    s.centre.x = std::clamp(s.centre.x, half, 1 - half);
+    s.centre.y = std::clamp(s.centre.y, half, 1 - half);
+    const ImVec2 uv0(s.centre.x - half, s.centre.y - half),
+        uv1(s.centre.x + half, s.centre.y + half);
+    const ImVec2 origin = ImGui::GetCursorScreenPos();
+    if (s.overlay_on_color && layer->kind != LayerKind::Color) {
+        ImGui::Image(reinterpret_cast<ImTextureID>(intptr_t(s.base_view.texture())), size, uv0,
+                     uv1);
+        ImGui::SetCursorScreenPos(origin);
+        ImGui::Image(reinterpret_cast<ImTextureID>(intptr_t(s.view.texture())), size, uv0, uv1,
+                     ImVec4(1, 1, 1, s.overlay_opacity));
+    } else {
+        ImGui::Image(reinterpret_cast<ImTextureID>(intptr_t(s.view.texture())), size, uv0, uv1);
+    }
+    s.image_rect = {origin.x, origin.y, origin.x + size.x, origin.y + size.y};
+    const ImGuiIO& io = ImGui::GetIO();
+    auto mouse_uv = [&] {
+        return ImVec2(uv0.x + (io.MousePos.x - origin.x) / size.x * (uv1.x - uv0.x),
+                      uv0.y + (io.MousePos.y - origin.y) / size.y * (uv1.y - uv0.y));
+    };
+    if (ImGui::IsItemHovered()) {
+        if (ImGui::IsMouseClicked(0)) {
+            const ImVec2 uv = mouse_uv();
+            s.pick_x = std::clamp(int(uv.x * L.width()), 0, L.width() - 1);
+            s.pick_y = std::clamp(int(uv.y * L.height()), 0, L.height() - 1);
+        }
+        if (io.MouseWheel != 0) {
+            const ImVec2 before = mouse_uv();
+            s.zoom = std::clamp(s.zoom * std::pow(1.25f, io.MouseWheel), 1.0f, 64.0f);
+            const float h2 = 0.5f / s.zoom;
+            // Keep the texel under the cursor where it is.
+            const float fx = (io.MousePos.x - origin.x) / size.x,
+                        fy = (io.MousePos.y - origin.y) / size.y;
+            s.centre = ImVec2(before.x - (fx - 0.5f) * 2 * h2, before.y - (fy - 0.5f) * 2 * h2);
+        }
+        if (ImGui::IsMouseDragging(1)) {
+            const ImVec2 d = io.MouseDelta;
+            s.centre.x -= d.x / size.x / s.zoom;
+            s.centre.y -= d.y / size.y / s.zoom;
+        }
+    }
+    if (s.pick_x >= 0) {  // mark the inspected pixel
+        const float px =
+            origin.x + ((s.pick_x + 0.5f) / L.width() - uv0.x) / (uv1.x - uv0.x) * size.x;
+        const float py =
+            origin.y + ((s.pick_y + 0.5f) / L.height() - uv0.y) / (uv1.y - uv0.y) * size.y;
+        if (s.image_rect.contains(px, py))
+            ImGui::GetWindowDrawList()->AddCircle(ImVec2(px, py), 6, IM_COL32(255, 60, 200, 255),
+                                                  12, 2);
+    }
+    draw_colorbar(s, *layer, ImGui::GetCursorScreenPos(), std::min(size.x, 420.0f));
+}
+
+void draw_inspector(Workbench& wb, Workbench::State& s) {
+    if (!s.shown || s.pick_x < 0) {
+        ImGui::TextWrapped("Click a pixel in the viewport to see every layer's value there.");
+        return;
+    }
+    ImGui::Text("pixel (%d, %d), frame %d", s.pick_x, s.pick_y, s.shown->frame);
+    ImGui::Separator();
+    for (const InspectorRow& row : wb.inspect()) {
+        std::string values;
+        char buf[32];
+        for (size_t c = 0; c < row.values.size(); ++c) {
+            std::snprintf(buf, sizeof buf, "%s%.5g", c ? ", " : "", row.values[c]);
+            values += buf;
+        }
+        ImGui::Text("%-10s %s %s", row.layer.c_str(), values.c_str(), row.note.c_str());
+    }
+    ImGui::Separator();
+    ImGui::TextDisabled("frame stats");
+    for (const auto& [key, value] : s.shown->stats.items())
+        if (!value.is_object()) ImGui::Text("%-14s %s", key.c_str(), value.dump().c_str());
+}
+
+void draw_timeline(Workbench::State& s) {
     if (ImGui::Button(s.playing ? "Pause" : "Play")) s.playing = !s.playing;
     ImGui::SameLine();
     if (ImGui::Button("<")) s.frame = std::max(0, s.frame - 1);
     ImGui::SameLine();
     if (ImGui::Button(">")) s.frame = std::min(s.scene.frame_count - 1, s.frame + 1);
     ImGui::SameLine();
+    ImGui::SetNextItemWidth(150);
+    ImGui::Combo("##stat", &s.stat_index, kStats, 3);
+    ImGui::SameLine();
     ImGui::SetNextItemWidth(-1);
     ImGui::SliderInt("##frame", &s.frame, 0, s.scene.frame_count - 1, "frame %d");
-    // Stats strip: frame time of every rendered frame (0 where not rendered yet).
-    std::vector<float> times(size_t(s.scene.frame_count), 0.0f);
+    // Stats strip: the chosen statistic for every rendered frame (0 where not rendered yet).
+    std::vector<float> values(size_t(s.scene.frame_count), 0.0f);
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
-        for (const auto& [f, r] : s.results) times[size_t(f)] = r.stats["time_ms"].get<float>();
+        for (const auto& [f, r] : s.results)
+            values[size_t(f)] = r.stats[kStats[s.stat_index]].get<float>();
     }
-    const float peak = *std::max_element(times.begin(), times.end());
-    ImGui::PlotHistogram("##times", times.data(), int(times.size()), 0, "frame time (ms)", 0.0f,
-                         peak > 0 ? peak : 1.0f, ImVec2(ImGui::GetContentRegionAvail().x, 48));
-}
-
-// Reads the window's back buffer (after drawing, before present) into a PNG.
-void write_window_png(const std::string& path, int w, int h) {
-    std::vector<unsigned char> rgba(size_t(w) * h * 4), rgb(size_t(w) * h * 3);
-    glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    glReadBuffer(GL_BACK);
-    glFinish();
-    glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
-    for (int y = 0; y < h; ++y)  // GL rows start at the bottom
-        for (int x = 0; x < w; ++x)
-            for (int c = 0; c < 3; ++c)
-                rgb[(size_t(h - 1 - y) * w + x) * 3 + c] = rgba[(size_t(y) * w + x) * 4 + c];
-    write_png(path, w, h, rgb);
-}
-
-int run_workbench_in(GlHost& host, const WorkbenchOptions& options) {
-    const std::string& scene_path = options.scene;
-    const int frame = options.frame;
-    int exit_code = 0;
-    {
-        WorkbenchState s;
-        s.scene_path = scene_path;
-        try {
-            s.scene = load_scene(scene_path);
-            s.frame = std::clamp(frame, 0, s.scene.frame_count - 1);
-            restart_renderer(s);
-        } catch (const Error& e) {
-            s.error = e.what();
-            s.scene.frame_count = 1;
-        }
-        LayerTexture texture;
-        bool layer_chosen = options.layer.empty();
-        int screenshot_countdown = -1;
-        auto last = std::chrono::steady_clock::now();
-
-        while (!host.should_close()) {
-            host.begin_frame();
-            ImGui_ImplOpenGL3_NewFrame();
-            ImGui::NewFrame();
-            const auto now = std::chrono::steady_clock::now();
-            const double dt = std::chrono::duration<double>(now - last).count();
-            last = now;
-
-            int fb_w, fb_h;
-            host.framebuffer_size(&fb_w, &fb_h);
-            const float left_w = 300, right_w = 300, bottom_h = 120;
-            const ImGuiWindowFlags fixed =
-                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse;
-
-            // Left: settings generated from the declarations.
-            ImGui::SetNextWindowPos(ImVec2(0, 0));
-            ImGui::SetNextWindowSize(ImVec2(left_w, fb_h - bottom_h));
-            ImGui::Begin("Settings", nullptr, fixed);
-            ImGui::Text("scene: %s", s.scene.name.c_str());
-            ImGui::Text("method: gbuffer");
-            uint32_t changed = 0;
-            if (s.renderer) {
-                SettingsGroup group = s.config.settings_group();
-                changed = draw_settings(group);
-            }
-            ImGui::End();
-            if (changed & (kInvalidatesGBuffer | kInvalidatesShading)) {
-                s.error.clear();
-                restart_renderer(s);
-            } else if (changed & kInvalidatesDisplay) {
-                s.texture_dirty = true;
-            }
-
-            if (s.playing) {
-                s.play_clock += dt;
-                std::lock_guard<std::mutex> lock(s.results_mutex);
-                if (s.play_clock >= 1.0 / s.scene.fps && s.results.count(s.frame)) {
-                    s.play_clock = 0.0;
-                    s.frame = (s.frame + 1) % s.scene.frame_count;
-                }
-            }
-            if (s.renderer) start_job_if_needed(s);
-
-            const FrameResult* result = nullptr;
-            {
-                std::lock_guard<std::mutex> lock(s.results_mutex);
-                auto it = s.results.find(s.frame);
-                if (it != s.results.end()) result = &it->second;
-                // Keep showing the latest rendered frame at or before the current one.
-                if (!result && !s.results.empty()) {
-                    auto lb = s.results.upper_bound(s.frame);
-                    if (lb != s.results.begin()) result = &std::prev(lb)->second;
-                }
-            }
-            if (result && !layer_chosen) {
-                layer_chosen = true;
-                int i = 0;
-                for (const Layer& l : result->layers.layers()) {
-                    if (l.name == options.layer) s.layer_index = i, s.texture_dirty = true;
-                    ++i;
-                }
-            }
-            if (result && (s.texture_dirty || s.shown_frame != result->frame)) {
-                const auto& layers = result->layers.layers();
-                s.layer_index = std::clamp(s.layer_index, 0, int(layers.size()) - 1);
-                DisplayParams params;
-                params.exposure_ev = s.config.frame.exposure;
-                texture.upload(result->layers, layers[size_t(s.layer_index)], params);
-                s.texture_dirty = false;
-                s.shown_frame = result->frame;
-            }
-
-            // Centre: viewport.
-            ImGui::SetNextWindowPos(ImVec2(left_w, 0));
-            ImGui::SetNextWindowSize(ImVec2(fb_w - left_w - right_w, fb_h - bottom_h));
-            ImGui::Begin("Viewport", nullptr, fixed);
-            if (!s.error.empty()) {
-                ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1, 0.4f, 0.4f, 1));
-                ImGui::TextWrapped("error: %s", s.error.c_str());
-                ImGui::PopStyleColor();
-            }
-            if (result) {
-                std::string names;
-                for (const Layer& l : result->layers.layers()) names += l.name + '\0';
-                ImGui::SetNextItemWidth(160);
-                if (ImGui::Combo("layer", &s.layer_index, names.c_str())) s.texture_dirty = true;
-                const Layer& shown = result->layers.layers()[size_t(s.layer_index)];
-                ImGui::SameLine();
-                ImGui::TextDisabled("[%s] %s", to_string(shown.kind), shown.description.c_str());
-                const ImVec2 avail = ImGui::GetContentRegionAvail();
-                const float scale = std::min(avail.x / texture.width(), avail.y / texture.height());
-                const ImVec2 size(texture.width() * scale, texture.height() * scale);
-                const ImVec2 origin = ImGui::GetCursorScreenPos();
-                ImGui::Image(reinterpret_cast<ImTextureID>(intptr_t(texture.id())), size);
-                if (ImGui::IsItemClicked()) {
-                    const ImVec2 m = ImGui::GetMousePos();
-                    s.inspect_x = std::clamp(int((m.x - origin.x) / scale), 0, texture.width() - 1);
-                    s.inspect_y =
-                        std::clamp(int((m.y - origin.y) / scale), 0, texture.height() - 1);
-                }
-            }
-            ImGui::End();
-
-            // Right: inspector.
-            ImGui::SetNextWindowPos(ImVec2(fb_w - right_w, 0));
-            ImGui::SetNextWindowSize(ImVec2(right_w, fb_h - bottom_h));
-            ImGui::Begin("Inspector", nullptr, fixed);
-            draw_inspector(s, result);
-            ImGui::End();
-
-            // Bottom: timeline and status.
-            ImGui::SetNextWindowPos(ImVec2(0, fb_h - bottom_h));
-            ImGui::SetNextWindowSize(ImVec2(float(fb_w), bottom_h));
-            ImGui::Begin("Timeline", nullptr, fixed | ImGuiWindowFlags_NoTitleBar);
-            draw_timeline(s);
-            if (s.job && !s.job->done()) {
-                const ProgressSnapshot p = s.job->snapshot();
-                ImGui::Text("rendering frame %d: %s %.0f%%", s.job_frame, p.stage.c_str(),
-                            100 * p.fraction);
-                ImGui::SameLine();
-                if (ImGui::SmallButton("cancel")) s.job->cancel();
-            } else if (result) {
-                ImGui::Text("frame %d: %.1f ms, %ld rays", result->frame,
-                            result->stats["time_ms"].get<double>(),
-                            result->stats["rays"].get<long>());
-            }
-            ImGui::End();
-
-            ImGui::Render();
-            glViewport(0, 0, fb_w, fb_h);
-            glClearColor(0.1f, 0.1f, 0.1f, 1.0f);
-            glClear(GL_COLOR_BUFFER_BIT);
-            ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-            if (!options.screenshot.empty()) {
-                // A couple of frames after the requested frame is on screen, so layout settled.
-                const bool ready = (result && result->frame == s.frame) || !s.error.empty();
-                if (ready && screenshot_countdown < 0) screenshot_countdown = 2;
-                if (screenshot_countdown == 0) {
-                    write_window_png(options.screenshot, fb_w, fb_h);
-                    std::fprintf(stderr, "wrote %s (%dx%d)\n", options.screenshot.c_str(), fb_w,
-                                 fb_h);
-                    exit_code = s.error.empty() ? 0 : 1;
-                    break;
-                }
-                if (screenshot_countdown > 0) --screenshot_countdown;
-            }
-            host.end_frame();
-        }
-        s.job.reset();
+    const float peak = *std::max_element(values.begin(), values.end());
+    char overlay[64];
+    std::snprintf(overlay, sizeof overlay, "%s (max %.4g)", kStats[s.stat_index], peak);
+    ImGui::PlotHistogram("##strip", values.data(), int(values.size()), 0, overlay, 0.0f,
+                         peak > 0 ? peak : 1.0f, ImVec2(ImGui::GetContentRegionAvail().x, 44));
+    if (s.job && !s.job->done()) {
+        const ProgressSnapshot p = s.job->snapshot();
+        ImGui::Text("rendering frame %d: %s %.0f%%  ETA %s", s.job_frame, p.stage.c_str(),
+                    100 * p.fraction,
+                    p.eta_s >= 0 ? (std::to_string(int(p.eta_s + 0.5)) + " s").c_str() : "--");
+        ImGui::SameLine();
+        if (ImGui::SmallButton("cancel")) s.job->cancel();
+    } else if (s.shown) {
+        ImGui::Text("frame %d: %.1f ms, %ld rays   %s", s.shown->frame,
+                    s.shown->stats["time_ms"].get<double>(), s.shown->stats["rays"].get<long>(),
+                    s.status.c_str());
     }
-    return exit_code;
 }
 
 }  // namespace
 
-int run_workbench(const WorkbenchOptions& options) {
-    IMGUI_CHECKVERSION();
-    ImGui::CreateContext();
-    ImGui::GetIO().IniFilename = nullptr;
-    ImGui::StyleColorsDark();
-    int code = 0;
-    {
-        GlfwHost host(options.width, options.height, "freqlab — " + options.scene);
-        ImGui_ImplOpenGL3_Init("#version 330");
-        code = run_workbench_in(host, options);
-        ImGui_ImplOpenGL3_Shutdown();
+Workbench::Workbench(const WorkbenchOptions& options) : s_(std::make_unique<State>()) {
+    State& s = *s_;
+    s.options = options;
+    if (!options.layer.empty()) s.layer_name = options.layer;
+    try {
+        s.scene = load_scene(options.scene);
+        s.config.method = parse_render_method(options.method);
+        SettingsGroup group = s.config.settings_group();
+        for (const std::string& a : options.settings) group.apply_assignment(a);
+        s.frame = std::clamp(options.frame, 0, s.scene.frame_count - 1);
+        s.device = std::make_unique<EmbreeDevice>(0);
+        restart_renderer(s);
+    } catch (const Error& e) {
+        s.error = e.what();
+        s.scene.frame_count = 1;
     }
-    ImGui::DestroyContext();
+}
+
+Workbench::~Workbench() {
+    s_->job.reset();
+}
+
+void Workbench::draw(int fb_w, int fb_h) {
+    State& s = *s_;
+    const float left_w = 320, right_w = 300, bottom_h = 130, menu_h = ImGui::GetFrameHeight();
+    const ImGuiWindowFlags fixed =
+        ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse;
+
+    // Keyboard shortcuts (when no widget wants the keyboard).
+    if (!ImGui::GetIO().WantCaptureKeyboard) {
+        if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Space))) s.playing = !s.playing;
+        if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_LeftArrow)))
+            s.frame = std::max(0, s.frame - 1);
+        if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_RightArrow)))
+            s.frame = std::min(s.scene.frame_count - 1, s.frame + 1);
+        if (ImGui::IsKeyPressed('F')) s.zoom = 1.0f, s.centre = ImVec2(0.5f, 0.5f);
+    }
+
+    if (ImGui::BeginMainMenuBar()) {
+        if (ImGui::BeginMenu("Export")) {
+            if (ImGui::MenuItem("Layer as PNG")) export_current(s, "png");
+            if (ImGui::MenuItem("All layers as EXR")) export_current(s, "exr");
+            if (ImGui::MenuItem("Stats as CSV")) export_current(s, "csv");
+            ImGui::EndMenu();
+        }
+        ImGui::EndMainMenuBar();
+    }
+
+    if (s.playing && ++s.play_ticks >= 2) {  // advance when the next frame is ready
+        s.play_ticks = 0;
+        std::lock_guard<std::mutex> lock(s.results_mutex);
+        if (s.results.count(s.frame)) s.frame = (s.frame + 1) % s.scene.frame_count;
+    }
+    start_job_if_needed(s);
+    {
+        std::lock_guard<std::mutex> lock(s.results_mutex);
+        auto it = s.results.find(s.frame);
+        // Keep showing the latest rendered frame at or before the current one.
+        if (it == s.results.end() && !s.results.empty()) {
+            auto lb = s.results.upper_bound(s.frame);
+            if (lb != s.results.begin()) it = std::prev(lb);
+        }
+        const FrameResult* r = it == s.results.end() ? nullptr : &it->second;
+        if (r != s.shown || (r && r->frame != s.shown_frame)) {
+            s.shown = r;
+            s.shown_frame = r ? r->frame : -1;
+            s.view_dirty = true;
+        }
+    }
+
+    ImGui::SetNextWindowPos(ImVec2(0, menu_h));
+    ImGui::SetNextWindowSize(ImVec2(left_w, fb_h - bottom_h - menu_h));
+    ImGui::Begin("Settings", nullptr, fixed);
+    draw_settings_panel(s);
+    ImGui::End();
+
+    ImGui::SetNextWindowPos(ImVec2(left_w, menu_h));
+    ImGui::SetNextWindowSize(ImVec2(fb_w - left_w - right_w, fb_h - bottom_h - menu_h));
+    ImGui::Begin("Viewport", nullptr, fixed);
+    draw_viewport(s);
+    ImGui::End();
+
+    ImGui::SetNextWindowPos(ImVec2(fb_w - right_w, menu_h));
+    ImGui::SetNextWindowSize(ImVec2(right_w, fb_h - bottom_h - menu_h));
+    ImGui::Begin("Inspector", nullptr, fixed);
+    draw_inspector(*this, s);
+    ImGui::End();
+
+    ImGui::SetNextWindowPos(ImVec2(0, fb_h - bottom_h));
+    ImGui::SetNextWindowSize(ImVec2(float(fb_w), bottom_h));
+    ImGui::Begin("Timeline", nullptr, fixed | ImGuiWindowFlags_NoTitleBar);
+    draw_timeline(s);
+    ImGui::End();
+}
+
+void Workbench::set_frame(int frame) {
+    s_->frame = std::clamp(frame, 0, s_->scene.frame_count - 1);
+}
+int Workbench::frame() const {
+    return s_->frame;
+}
+
+bool Workbench::set_layer(const std::string& name) {
+    if (s_->shown && !s_->shown->layers.find(name)) return false;
+    s_->layer_name = name;
+    s_->view_dirty = true;
+    return true;
+}
+
+void Workbench::apply_setting(const std::string& assignment) {
+    SettingsGroup group = s_->config.settings_group();
+    const uint32_t flags = group.apply_assignment(assignment, "workbench");
+    if (flags & (kInvalidatesGBuffer | kInvalidatesShading))
+        restart_renderer(*s_);
+    else
+        s_->view_dirty = true;
+}
+
+bool Workbench::frame_shown() const {
+    return (s_->shown && s_->shown->frame == s_->frame && !s_->view_dirty) || !s_->error.empty();
+}
+
+void Workbench::wait_for_render() {
+    if (s_->job) s_->job->wait();
+}
+
+const LayerSet* Workbench::layers() const {
+    return s_->shown ? &s_->shown->layers : nullptr;
+}
+DisplayRange Workbench::shown_range() const {
+    return s_->shown_range;
+}
+
+void Workbench::select_pixel(int x, int y) {
+    s_->pick_x = x;
+    s_->pick_y = y;
+}
+
+std::vector<InspectorRow> Workbench::inspect() const {
+    std::vector<InspectorRow> rows;
+    const State& s = *s_;
+    if (!s.shown || s.pick_x < 0) return rows;
+    const LayerSet& L = s.shown->layers;
+    if (s.pick_x >= L.width() || s.pick_y >= L.height()) return rows;
+    for (const Layer& l : L.layers()) {
+        InspectorRow row{l.name, {}, ""};
+        for (int c = 0; c < l.channels; ++c)
+            row.values.push_back(l.at(L.width(), s.pick_x, s.pick_y, c));
+        if (l.kind == LayerKind::Categorical) {
+            const int v = int(std::lround(row.values[0]));
+            if (v >= 0 && v < int(l.legend.size())) row.note = l.legend[size_t(v)];
+        }
+        rows.push_back(std::move(row));
+    }
+    return rows;
+}
+
+ScreenRect Workbench::image_rect() const {
+    return s_->image_rect;
+}
+ScreenRect Workbench::colorbar_rect() const {
+    return s_->colorbar_rect;
+}
+std::vector<std::pair<std::string, ScreenRect>> Workbench::legend_swatches() const {
+    return s_->legend;
+}
+const std::string& Workbench::error() const {
+    return s_->error;
+}
+
+void render_ui_frame(GlHost& host, Workbench& workbench) {
+    host.begin_frame();
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui::NewFrame();
+    int w, h;
+    host.framebuffer_size(&w, &h);
+    workbench.draw(w, h);
+    ImGui::Render();
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glViewport(0, 0, w, h);
+    glClearColor(0.1f, 0.1f, 0.1f, 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+}
+
+namespace {
+
+// Shared by both hosts: run until the requested frame is on screen (plus two frames for the
+// layout to settle), write the screenshot if asked, or keep going until the window closes.
+int run_loop(GlHost& host, Workbench& wb, const WorkbenchOptions& options, bool interactive) {
+    int settle = -1;
+    for (;;) {
+        if (interactive && host.should_close()) return 0;
+        if (!interactive && !wb.frame_shown()) wb.wait_for_render();
+        render_ui_frame(host, wb);
+        if (!options.screenshot.empty()) {
+            if (settle < 0 && wb.frame_shown()) settle = 2;
+            if (settle == 0) {
+                int w, h;
+                host.framebuffer_size(&w, &h);
+                write_png(options.screenshot, w, h, host.read_rgb());
+                std::fprintf(stderr, "wrote %s (%dx%d)\n", options.screenshot.c_str(), w, h);
+                if (!wb.error().empty())
+                    std::fprintf(stderr, "error shown: %s\n", wb.error().c_str());
+                return wb.error().empty() ? 0 : 1;
+            }
+            if (settle > 0) --settle;
+        }
+        host.end_frame();
+    }
+}
+
+struct ImGuiSession {
+    ImGuiSession() {
+        IMGUI_CHECKVERSION();
+        ImGui::CreateContext();
+        ImGui::GetIO().IniFilename = nullptr;
+        ImGui::StyleColorsDark();
+    }
+    ~ImGuiSession() { ImGui::DestroyContext(); }
+};
+
+}  // namespace
+
+int run_workbench(const WorkbenchOptions& options) {
+    ImGuiSession imgui;
+    GlfwHost host(options.width, options.height, "freqlab — " + options.scene);
+    ImGui_ImplOpenGL3_Init("#version 330");
+    int code;
+    {
+        Workbench wb(options);
+        code = run_loop(host, wb, options, true);
+    }
+    ImGui_ImplOpenGL3_Shutdown();
+    return code;
+}
+
+int run_headless(const WorkbenchOptions& options) {
+    if (options.screenshot.empty())
+        throw Error("--headless", "--screenshot",
+                    "the headless workbench needs --screenshot OUT.png");
+    ImGuiSession imgui;
+    OsMesaHost host(options.width, options.height);
+    ImGui_ImplOpenGL3_Init("#version 330");
+    int code;
+    {
+        Workbench wb(options);
+        code = run_loop(host, wb, options, false);
+    }
+    ImGui_ImplOpenGL3_Shutdown();
     return code;
 }
 

@@ -1,22 +1,78 @@
-// The workbench window: settings panels generated from core's declarations, the viewport
-// showing the colour or any layer, a pixel inspector, and the timeline with a stats strip.
+// The workbench: settings panels generated from core's declarations, a viewport showing the
+// colour or any layer (GPU colormap by kind, colorbar or legend, overlay on colour with an
+// opacity, pan/zoom), a pixel inspector, and a timeline with a per-frame stats strip.
 // Rendering runs as a cancellable background job; the UI thread never waits for it.
+//
+// The same Workbench draws into a GLFW window or an OSMesa context (gl_host.h); tests drive it
+// through the public methods below rather than through pixels alone.
 #pragma once
 
+#include <memory>
 #include <string>
+#include <vector>
+
+#include "image/colormap.h"
+#include "image/layers.h"
 
 namespace freqlab::ui {
 
+class GlHost;
+
 struct WorkbenchOptions {
     std::string scene = "builtin:default";  // a file or builtin:default
+    std::string method = "gbuffer";
     int frame = 0;
-    std::string layer;  // initial layer shown ("" = color)
+    std::string layer;  // layer shown ("" = color)
     std::string
-        screenshot;  // when set: once the frame is rendered, write the window as PNG and exit
+        screenshot;  // when set: once the frame is shown, write the workbench as PNG and exit
     int width = 1280, height = 760;
+    std::vector<std::string> settings;  // "key=value", as --set
 };
 
-// Opens a window; returns the exit code.
-int run_workbench(const WorkbenchOptions& options);
+struct ScreenRect {
+    float x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    bool contains(float x, float y) const { return x >= x0 && x < x1 && y >= y0 && y < y1; }
+};
+
+struct InspectorRow {
+    std::string layer;
+    std::vector<float> values;
+    std::string note;  // legend entry of a categorical value
+};
+
+class Workbench {
+  public:
+    explicit Workbench(const WorkbenchOptions& options);  // needs a current GL + ImGui context
+    ~Workbench();
+
+    void draw(int framebuffer_width, int framebuffer_height);  // inside ImGui::NewFrame/Render
+
+    // State, for hosts and tests.
+    void set_frame(int frame);
+    int frame() const;
+    bool set_layer(const std::string& name);
+    void apply_setting(const std::string& assignment);  // "prefix.key=value"; re-renders as needed
+    bool frame_shown() const;                           // the current frame's result is on screen
+    void wait_for_render();  // blocks until no render job is running (tests, headless)
+    const LayerSet* layers() const;
+    DisplayRange shown_range() const;
+    void select_pixel(int x, int y);
+    std::vector<InspectorRow> inspect() const;  // every layer at the selected pixel
+    ScreenRect image_rect() const;              // where the viewport image was drawn
+    ScreenRect colorbar_rect() const;           // the colorbar's gradient (empty if none)
+    std::vector<std::pair<std::string, ScreenRect>> legend_swatches() const;
+    const std::string& error() const;
+
+    struct State;  // defined in workbench.cpp; public so its helper functions can name it
+
+  private:
+    std::unique_ptr<State> s_;
+};
+
+// One UI frame on a host: platform frame, ImGui frame, the workbench, GL draw.
+void render_ui_frame(GlHost& host, Workbench& workbench);
+
+int run_workbench(const WorkbenchOptions& options);  // a GLFW window (needs a display)
+int run_headless(const WorkbenchOptions& options);   // OSMesa; writes options.screenshot
 
 }  // namespace freqlab::ui

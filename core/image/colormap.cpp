@@ -47,6 +47,27 @@ float linear_to_srgb(float c) {
     return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
 }
 
+std::vector<double> colorbar_ticks(double lo, double hi, int max_ticks) {
+    std::vector<double> ticks;
+    if (!(hi > lo) || max_ticks < 2) return {lo, hi};
+    const double raw = (hi - lo) / (max_ticks - 1);
+    const double mag = std::pow(10.0, std::floor(std::log10(raw)));
+    double step = mag;
+    for (double m : {1.0, 2.0, 5.0, 10.0})
+        if (m * mag >= raw) {
+            step = m * mag;
+            break;
+        }
+    // Ticks as k / (1/step) when step < 1 (1/step is an integer for 1-2-5 steps): 3 / 5 rounds
+    // to 0.6 exactly where 3 * 0.2 does not.
+    const double inverse = step < 1 ? std::round(1.0 / step) : 0.0;
+    for (double k = std::ceil(lo / step); k * step <= hi + 1e-9 * step; k += 1) {
+        const double t = inverse > 0 ? k / inverse : k * step;
+        ticks.push_back(t == 0 ? 0.0 : t);
+    }
+    return ticks;
+}
+
 DisplayRange auto_range(const Layer& layer) {
     float lo = INFINITY, hi = -INFINITY;
     for (float v : layer.data)

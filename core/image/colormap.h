@@ -27,6 +27,9 @@ struct DisplayParams {
     DisplayRange range;  // used when !auto_range
 };
 
+// "Nice" tick values (1, 2, 5 x 10^k steps) inside [lo, hi], at most about `max_ticks`.
+std::vector<double> colorbar_ticks(double lo, double hi, int max_ticks = 6);
+
 // Tonemapped/colormapped 8-bit RGB of one layer. Non-finite values show as magenta so they
 // never pass unnoticed.
 std::vector<unsigned char> layer_to_rgb8(const LayerSet& set, const Layer& layer,

@@ -96,11 +96,16 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
     s.rays.clear();
     s.contributions.clear();
     s.unit.clear();
-    auto candidate = [&](const vec3& dir, float tfar, const vec3& value, int unit) {
+    const size_t traced_before = traced_ ? traced_->size() : 0;
+    auto candidate = [&](const vec3& dir, float tfar, const vec3& value, int unit, float pdf = 0,
+                         float other_pdf = 0, float w = 1) {
         if (!(luminance(value) > 0.0f) || glm::dot(dir, ng) <= 0.0f) return;
         s.rays.push_back(Ray{origin, dir, 0.0f, tfar});
         s.contributions.push_back(value);
         s.unit.push_back(unit);
+        if (traced_)
+            traced_->push_back(SampleTrace{unit >= 0, unit >= 0 ? unit : -unit - 1, dir, pdf,
+                                           other_pdf, w, value, false});
     };
 
     for (int i = 0; i < n_env; ++i) {
@@ -111,9 +116,10 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
             const vec3 le = environment_->sample(u, &dir, &pdf_env);
             const float cos_i = glm::dot(dir, ns);
             if (pdf_env > 0.0f && cos_i > 0.0f) {
-                const float w =
-                    power_heuristic(float(n_env), pdf_env, float(n_brdf), brdf.pdf(sp.wo, dir));
-                candidate(dir, INFINITY, le * brdf.eval(sp.wo, dir) * (cos_i * w / pdf_env), i);
+                const float pdf_brdf = brdf.pdf(sp.wo, dir);
+                const float w = power_heuristic(float(n_env), pdf_env, float(n_brdf), pdf_brdf);
+                candidate(dir, INFINITY, le * brdf.eval(sp.wo, dir) * (cos_i * w / pdf_env), i,
+                          pdf_env, pdf_brdf, w);
             }
         }
         for (const Light* l : lights_) {
@@ -152,7 +158,7 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
         float pdf_env;
         const vec3 le = environment_->eval_with_pdf(bs.wi, &pdf_env);
         const float w = power_heuristic(float(n_brdf), bs.pdf, float(n_env), pdf_env);
-        candidate(bs.wi, INFINITY, le * bs.f * (cos_i * w / bs.pdf), -(j + 1));
+        candidate(bs.wi, INFINITY, le * bs.f * (cos_i * w / bs.pdf), -(j + 1), bs.pdf, pdf_env, w);
     }
 
     const size_t n_rays = s.rays.size();
@@ -162,6 +168,8 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
     }
     scene_.occluded_stream(s.rays.data(), int(n_rays), s.occluded.get());
     if (recorded_) recorded_->insert(recorded_->end(), s.rays.begin(), s.rays.end());
+    if (traced_)
+        for (size_t k = 0; k < n_rays; ++k) (*traced_)[traced_before + k].occluded = s.occluded[k];
     result.rays = long(n_rays);
 
     s.env_units.assign(size_t(n_env), vec3(0.0f));

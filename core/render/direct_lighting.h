@@ -53,6 +53,16 @@ class DirectLighting {
     RadianceEstimate estimate(const ShadingPoint& point, int spp, CounterRng& rng) const;
 
     ShadingPoint shading_point(const SurfaceHit& hit, const vec3& wo) const;
+    // --debug-pixel: every sample of estimate() is appended here (single-threaded use).
+    struct SampleTrace {
+        bool environment_strategy;  // else BRDF strategy; lights count as environment units
+        int unit;
+        vec3 direction;
+        float pdf, other_pdf, mis_weight;
+        vec3 contribution;  // before visibility
+        bool occluded = false;
+    };
+    void trace_samples(std::vector<SampleTrace>* sink) { traced_ = sink; }
     // Benchmarks only: every shadow ray cast is appended here (single-threaded use).
     void record_rays(std::vector<Ray>* sink) { recorded_ = sink; }
     vec3 offset_origin(const vec3& p, const vec3& n) const;
@@ -63,6 +73,7 @@ class DirectLighting {
     std::vector<const Light*> lights_;  // point, directional, quad
     ShadingSettings settings_;
     std::vector<Ray>* recorded_ = nullptr;
+    std::vector<SampleTrace>* traced_ = nullptr;
 };
 
 }  // namespace freqlab
