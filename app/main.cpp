@@ -71,6 +71,9 @@ int main(int argc, char** argv) {
     std::vector<std::string> gui_sets;
     gui->add_option("--method", gui_method, "gbuffer|mis|reference");
     gui->add_option("--set", gui_sets, "key=value setting (repeatable)");
+    std::string gui_inspect, gui_warm;
+    gui->add_option("--inspect", gui_inspect, "X,Y: select this pixel in the inspector");
+    gui->add_option("--warm-from", gui_warm, "render frames from this one up to --frame first");
 
     freqlab::RenderArgs r;
     auto* render = app.add_subcommand("render", "render frames to EXR + PNG + stats.json");
@@ -118,6 +121,12 @@ int main(int argc, char** argv) {
         options.layer = overlay;
         options.screenshot = screenshot;
         options.settings = gui_sets;
+        if (!gui_inspect.empty()) {
+            if (std::sscanf(gui_inspect.c_str(), "%d,%d", &options.inspect_x, &options.inspect_y) !=
+                2)
+                throw freqlab::Error("--inspect", gui_inspect, "expected X,Y");
+        }
+        if (!gui_warm.empty()) options.warm_from = std::stoi(gui_warm);
         if (!gui_size.empty()) {
             const auto [w, h] = freqlab::parse_size(gui_size, "--size");
             options.width = w, options.height = h;

@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
-# Regenerates the workbench screenshots shown in README.md: a real GLFW window under Xvfb,
-# read back from its framebuffer by `freqlab gui --screenshot`.
+# Regenerates the workbench screenshots shown in README.md. Most are rendered offscreen through
+# OSMesa (`freqlab gui --headless`); one is a real GLFW window under Xvfb.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=build/app/freqlab
 [ -x "$bin" ] || { echo "build first: bash scripts/setup.sh" >&2; exit 1; }
-run() { xvfb-run -a -s "-screen 0 1280x800x24" "$bin" gui "$@"; }
-run builtin:default --frame 0 --screenshot screenshots/workbench_color.png
-run builtin:default --frame 24 --overlay normal --screenshot screenshots/workbench_normal_layer.png
-run builtin:default --frame 24 --overlay object --screenshot screenshots/workbench_object_layer.png
-run scenes/showcase.json --frame 0 --screenshot screenshots/workbench_showcase.png
+shot() { out=$1; shift; env -u DISPLAY "$bin" gui "$@" --headless --screenshot "screenshots/$out"; }
+shot viewport_color.png scenes/rotor.json --method mis --set mis.spp=32 --frame 0
+shot overlay_colorbar.png scenes/rotor.json --method mis --set mis.spp=32 --frame 0 --overlay variance
+shot inspector.png builtin:default --method mis --frame 0 --overlay object --inspect 320,250
+shot timeline_stats.png builtin:default --method mis --set mis.spp=8 --set frame.width=320 \
+     --set frame.height=180 --warm-from 0 --frame 23
+xvfb-run -a -s "-screen 0 1280x800x24" "$bin" gui scenes/creatures.json --method mis \
+     --set mis.spp=16 --overlay normal --screenshot screenshots/window_creatures_normals.png

@@ -139,16 +139,20 @@ void draw_colorbar(Workbench::State& s, const Layer& layer, ImVec2 origin, float
     s.legend.clear();
     if (layer.kind == LayerKind::Color || layer.channels >= 3) return;
     if (layer.kind == LayerKind::Categorical) {
-        float x = origin.x;
+        // Swatch + name per category, wrapping to new lines within the viewport's width.
+        const float right = origin.x + std::max(width, ImGui::GetContentRegionAvail().x);
+        float x = origin.x, y = origin.y;
         for (size_t i = 0; i < layer.legend.size(); ++i) {
-            const ImVec2 a(x, origin.y + 2), b(x + 14, origin.y + 16);
+            const float item = 18 + ImGui::CalcTextSize(layer.legend[i].c_str()).x + 14;
+            if (x > origin.x && x + item > right) x = origin.x, y += 20;
+            const ImVec2 a(x, y + 2), b(x + 14, y + 16);
             dl->AddRectFilled(a, b, to_u32(categorical(int(i))));
-            dl->AddText(ImVec2(x + 18, origin.y + 2), IM_COL32(230, 230, 230, 255),
+            dl->AddText(ImVec2(x + 18, y + 2), IM_COL32(230, 230, 230, 255),
                         layer.legend[i].c_str());
             s.legend.push_back({layer.legend[i], ScreenRect{a.x, a.y, b.x, b.y}});
-            x += 18 + ImGui::CalcTextSize(layer.legend[i].c_str()).x + 14;
+            x += item;
         }
-        ImGui::Dummy(ImVec2(width, 20));
+        ImGui::Dummy(ImVec2(width, y - origin.y + 20));
         return;
     }
     // Gradient in 128 steps drawn from the same colormap functions as the LUTs.
@@ -165,9 +169,11 @@ void draw_colorbar(Workbench::State& s, const Layer& layer, ImVec2 origin, float
     }
     s.colorbar_rect = {origin.x, origin.y, origin.x + width, origin.y + h};
     for (double t : colorbar_ticks(r.lo, r.hi)) {
-        const float x = origin.x + float((t - r.lo) / (r.hi - r.lo)) * width;
-        dl->AddLine(ImVec2(x, origin.y + h), ImVec2(x, origin.y + h + 5),
-                    IM_COL32(230, 230, 230, 255));
+        // A one-pixel rectangle on a whole pixel: crisp, where an anti-aliased line would
+        // smear over two columns at half intensity.
+        const float x = std::floor(origin.x + float((t - r.lo) / (r.hi - r.lo)) * width);
+        dl->AddRectFilled(ImVec2(x, origin.y + h), ImVec2(x + 1, origin.y + h + 5),
+                          IM_COL32(230, 230, 230, 255));
         char label[32];
         std::snprintf(label, sizeof label, "%g", t);
         const float tw = ImGui::CalcTextSize(label).x;
@@ -343,7 +349,8 @@ void draw_inspector(Workbench& wb, Workbench::State& s) {
     ImGui::Separator();
     ImGui::TextDisabled("frame stats");
     for (const auto& [key, value] : s.shown->stats.items())
-        if (!value.is_object()) ImGui::Text("%-14s %s", key.c_str(), value.dump().c_str());
+        if (!value.is_object() && (s.options.show_timings || key != "time_ms"))
+            ImGui::Text("%-14s %s", key.c_str(), value.dump().c_str());
 }
 
 void draw_timeline(Workbench::State& s) {
@@ -377,9 +384,12 @@ void draw_timeline(Workbench::State& s) {
                     p.eta_s >= 0 ? (std::to_string(int(p.eta_s + 0.5)) + " s").c_str() : "--");
         ImGui::SameLine();
         if (ImGui::SmallButton("cancel")) s.job->cancel();
-    } else if (s.shown) {
+    } else if (s.shown && s.options.show_timings) {
         ImGui::Text("frame %d: %.1f ms, %ld rays   %s", s.shown->frame,
                     s.shown->stats["time_ms"].get<double>(), s.shown->stats["rays"].get<long>(),
+                    s.status.c_str());
+    } else if (s.shown) {
+        ImGui::Text("frame %d: %ld rays   %s", s.shown->frame, s.shown->stats["rays"].get<long>(),
                     s.status.c_str());
     }
 }
@@ -390,6 +400,7 @@ Workbench::Workbench(const WorkbenchOptions& options) : s_(std::make_unique<Stat
     State& s = *s_;
     s.options = options;
     if (!options.layer.empty()) s.layer_name = options.layer;
+    if (!options.show_timings) s.stat_index = 1;  // rays: the same on every host
     try {
         s.scene = load_scene(options.scene);
         s.config.method = parse_render_method(options.method);
@@ -577,6 +588,18 @@ namespace {
 // layout to settle), write the screenshot if asked, or keep going until the window closes.
 int run_loop(GlHost& host, Workbench& wb, const WorkbenchOptions& options, bool interactive) {
     int settle = -1;
+    if (options.warm_from >= 0) {
+        for (int f = options.warm_from; f < options.frame; ++f) {
+            wb.set_frame(f);
+            for (int i = 0; i < 1000 && !wb.frame_shown(); ++i) {
+                wb.wait_for_render();
+                render_ui_frame(host, wb);
+                host.end_frame();
+            }
+        }
+        wb.set_frame(options.frame);
+    }
+    if (options.inspect_x >= 0) wb.select_pixel(options.inspect_x, options.inspect_y);
     for (;;) {
         if (interactive && host.should_close()) return 0;
         if (!interactive && !wb.frame_shown()) wb.wait_for_render();

@@ -26,7 +26,12 @@ struct WorkbenchOptions {
     std::string
         screenshot;  // when set: once the frame is shown, write the workbench as PNG and exit
     int width = 1280, height = 760;
-    std::vector<std::string> settings;  // "key=value", as --set
+    std::vector<std::string> settings;   // "key=value", as --set
+    int inspect_x = -1, inspect_y = -1;  // pixel selected in the inspector
+    int warm_from = -1;                  // render frames warm_from .. frame-1 first (stats strip)
+    // Wall-clock timings on screen (status line, stats strip, inspector). Off gives pictures
+    // that depend only on the state: what tests compare across hosts.
+    bool show_timings = true;
 };
 
 struct ScreenRect {

@@ -77,6 +77,17 @@ DisplayRange auto_range(const Layer& layer) {
         const float m = std::max(std::max(std::fabs(lo), std::fabs(hi)), 1e-20f);
         return {-m, m};
     }
+    if (layer.channels == 1) {
+        // Robust upper end: the 99.5th percentile, so one firefly (a sun glint in a variance
+        // layer) does not flatten everything else into the bottom colour.
+        std::vector<float> finite;
+        finite.reserve(layer.data.size());
+        for (float v : layer.data)
+            if (std::isfinite(v)) finite.push_back(v);
+        const size_t k = size_t(0.995 * double(finite.size() - 1));
+        std::nth_element(finite.begin(), finite.begin() + long(k), finite.end());
+        hi = finite[k];
+    }
     if (hi <= lo) hi = lo + 1.0f;
     return {lo, hi};
 }

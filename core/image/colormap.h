@@ -18,7 +18,8 @@ float linear_to_srgb(float c);
 struct DisplayRange {
     float lo = 0.0f, hi = 1.0f;
 };
-// Continuous: [min, max] of the finite values; Signed: [-m, m] with m = max |v|.
+// Continuous scalars: [min, 99.5th percentile] of the finite values (robust to fireflies);
+// vectors: [min, max]; Signed: [-m, m] with m = max |v|.
 DisplayRange auto_range(const Layer& layer);
 
 struct DisplayParams {

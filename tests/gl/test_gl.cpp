@@ -1,0 +1,229 @@
+// The workbench's GL path under OSMesa (no display): colormaps on the GPU against the CPU
+// colormaps, colorbar ticks, categorical legend, the inspector through a simulated click, and
+// the headless screenshot. Label `gl`; DISPLAY is unset before anything runs.
+#include <gtest/gtest.h>
+#include <imgui.h>
+#include <imgui_impl_opengl3.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+
+#include "gl_host.h"
+#include "image/colormap.h"
+#include "layer_view.h"
+#include "osmesa_host.h"
+#include "workbench.h"
+
+using namespace freqlab;
+using namespace freqlab::ui;
+namespace fs = std::filesystem;
+
+namespace {
+
+// An ImGui context plus an OSMesa context with the OpenGL3 backend, per test.
+struct GlSession {
+    explicit GlSession(int w = 960, int h = 600) {
+        ImGui::CreateContext();
+        ImGui::GetIO().IniFilename = nullptr;
+        host = std::make_unique<OsMesaHost>(w, h);
+        ImGui_ImplOpenGL3_Init("#version 330");
+    }
+    ~GlSession() {
+        ImGui_ImplOpenGL3_Shutdown();
+        host.reset();
+        ImGui::DestroyContext();
+    }
+    std::unique_ptr<OsMesaHost> host;
+};
+
+void expect_colour(const unsigned char* px, const vec3& expected, const std::string& where) {
+    for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(int(px[c]), int(std::lround(expected[c] * 255.0f)), 2)
+            << where << " channel " << c;
+}
+
+LayerSet ramp_layers() {
+    LayerSet set(256, 2);
+    Layer& cont = set.add("cont", LayerKind::Continuous, 1);
+    Layer& sig = set.add("sig", LayerKind::Signed, 1);
+    Layer& cat = set.add("cat", LayerKind::Categorical, 1);
+    Layer& col = set.add("color", LayerKind::Color, 3);
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 256; ++x) {
+            const float t = x / 255.0f;
+            cont.at(256, x, y) = 10.0f + 20.0f * t;  // range [10, 30]
+            sig.at(256, x, y) = -4.0f + 8.0f * t;    // range [-4, 4]
+            cat.at(256, x, y) = float(x % 13);
+            for (int c = 0; c < 3; ++c) col.at(256, x, y, c) = t * (c + 1) / 3.0f;
+        }
+    cont.at(256, 7, 1) = NAN;
+    return set;
+}
+
+}  // namespace
+
+TEST(GlColormap, EachKindMatchesTheCpuColormap) {
+    GlSession gl;
+    LayerView view;
+    const LayerSet set = ramp_layers();
+    DisplayParams fixed;
+    fixed.auto_range = false;
+
+    fixed.range = {10.0f, 30.0f};
+    view.render(set, set.get("cont"), fixed);
+    std::vector<unsigned char> px = view.read_rgba();
+    for (int x : {0, 37, 128, 200, 255})
+        expect_colour(&px[size_t(x) * 4], viridis(x / 255.0f), "viridis x=" + std::to_string(x));
+    expect_colour(&px[(256 + 7) * 4], vec3(1, 0, 1), "NaN shows magenta");
+
+    const DisplayRange r = view.render(set, set.get("sig"), DisplayParams{});  // auto: [-4, 4]
+    EXPECT_FLOAT_EQ(r.lo, -4.0f);
+    EXPECT_FLOAT_EQ(r.hi, 4.0f);
+    px = view.read_rgba();
+    for (int x : {0, 64, 128, 191, 255})
+        expect_colour(&px[size_t(x) * 4], diverging((-4.0f + 8.0f * x / 255.0f) / 4.0f),
+                      "diverging x=" + std::to_string(x));
+
+    view.render(set, set.get("cat"), DisplayParams{});
+    px = view.read_rgba();
+    for (int x : {0, 3, 9, 12, 25})
+        expect_colour(&px[size_t(x) * 4], categorical(x % 13), "category x=" + std::to_string(x));
+
+    DisplayParams exposure;
+    exposure.exposure_ev = 1.0f;
+    view.render(set, set.get("color"), exposure);
+    px = view.read_rgba();
+    for (int x : {0, 40, 100, 255})
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(int(px[size_t(x) * 4 + c]),
+                        int(std::lround(linear_to_srgb(2.0f * x / 255.0f * (c + 1) / 3.0f) * 255)),
+                        2)
+                << "colour x=" << x;
+}
+
+namespace {
+
+void run_until_shown(GlSession& gl, Workbench& wb) {
+    for (int i = 0; i < 400 && !wb.frame_shown(); ++i) {
+        wb.wait_for_render();
+        render_ui_frame(*gl.host, wb);
+    }
+    ASSERT_TRUE(wb.frame_shown()) << wb.error();
+    render_ui_frame(*gl.host, wb);  // one more frame: the layout uses the shown result
+}
+
+WorkbenchOptions small_scene(const std::string& layer) {
+    WorkbenchOptions o;
+    o.layer = layer;
+    o.settings = {"frame.width=160", "frame.height=90", "gbuffer.aa_samples=1"};
+    return o;
+}
+
+}  // namespace
+
+TEST(GlWorkbench, ColorbarHasTheColormapAndItsTicks) {
+    GlSession gl;
+    Workbench wb(small_scene("depth"));
+    run_until_shown(gl, wb);
+    const ScreenRect bar = wb.colorbar_rect();
+    ASSERT_GT(bar.x1 - bar.x0, 100.0f);
+    const std::vector<unsigned char> rgb = gl.host->read_rgb();
+    int w, h;
+    gl.host->framebuffer_size(&w, &h);
+    auto at = [&](float x, float y) { return &rgb[(size_t(y) * w + size_t(x)) * 3]; };
+    const float ymid = 0.5f * (bar.y0 + bar.y1);
+    for (float t : {0.05f, 0.3f, 0.5f, 0.8f, 0.95f})
+        expect_colour(at(bar.x0 + t * (bar.x1 - bar.x0), ymid), viridis(t),
+                      "colorbar t=" + std::to_string(t));
+    const DisplayRange r = wb.shown_range();
+    const std::vector<double> ticks = colorbar_ticks(r.lo, r.hi);
+    ASSERT_GE(ticks.size(), 3u);
+    for (double t : ticks) {
+        const float x = bar.x0 + float((t - r.lo) / (r.hi - r.lo)) * (bar.x1 - bar.x0);
+        // A one-pixel line: look at the pixel columns either side of its position.
+        int brightest = 0;
+        for (float dx : {-1.0f, 0.0f, 1.0f}) {
+            const unsigned char* p = at(std::clamp(x + dx, bar.x0, bar.x1 - 1), bar.y1 + 2);
+            brightest = std::max(brightest, int(p[0]) + p[1] + p[2]);
+        }
+        EXPECT_GT(brightest, 3 * 150) << "tick mark at " << t;
+    }
+}
+
+TEST(GlWorkbench, CategoricalLayerHasOneColourPerCategoryAndALegend) {
+    GlSession gl;
+    Workbench wb(small_scene("object"));
+    run_until_shown(gl, wb);
+    const auto swatches = wb.legend_swatches();
+    ASSERT_EQ(swatches.size(), 6u);  // background + the built-in scene's 5 objects
+    EXPECT_EQ(swatches[0].first, "background");
+    EXPECT_EQ(swatches[5].first, "torus");
+    const std::vector<unsigned char> rgb = gl.host->read_rgb();
+    int w, h;
+    gl.host->framebuffer_size(&w, &h);
+    for (size_t i = 0; i < swatches.size(); ++i) {
+        const ScreenRect& r = swatches[i].second;
+        const size_t p = (size_t((r.y0 + r.y1) / 2) * w + size_t((r.x0 + r.x1) / 2)) * 3;
+        expect_colour(&rgb[p], categorical(int(i)), "legend " + swatches[i].first);
+    }
+}
+
+TEST(GlWorkbench, InspectorReturnsTheExactValuesOfTheClickedPixel) {
+    GlSession gl;
+    Workbench wb(small_scene("color"));
+    run_until_shown(gl, wb);
+    const ScreenRect img = wb.image_rect();
+    const LayerSet* L = wb.layers();
+    ASSERT_NE(L, nullptr);
+    const int px = 101, py = 67;  // a pixel on the ground
+    const float sx = img.x0 + (px + 0.5f) / L->width() * (img.x1 - img.x0);
+    const float sy = img.y0 + (py + 0.5f) / L->height() * (img.y1 - img.y0);
+    gl.host->set_mouse(sx, sy, false);
+    render_ui_frame(*gl.host, wb);
+    gl.host->set_mouse(sx, sy, true);  // press
+    render_ui_frame(*gl.host, wb);
+    gl.host->set_mouse(sx, sy, false);  // release
+    render_ui_frame(*gl.host, wb);
+    const std::vector<InspectorRow> rows = wb.inspect();
+    ASSERT_EQ(rows.size(), L->layers().size());
+    for (const InspectorRow& row : rows) {
+        const Layer& l = L->get(row.layer);
+        ASSERT_EQ(int(row.values.size()), l.channels);
+        for (int c = 0; c < l.channels; ++c)
+            EXPECT_EQ(row.values[size_t(c)], l.at(L->width(), px, py, c)) << row.layer;
+    }
+    EXPECT_EQ(rows.back().layer, "object");
+    EXPECT_EQ(rows.back().note, "ground");
+}
+
+TEST(GlWorkbench, HeadlessScreenshotHasTheRequestedSizeAndContent) {
+    const fs::path out = fs::temp_directory_path() / "freqlab_headless.png";
+    fs::remove(out);
+    WorkbenchOptions o = small_scene("");
+    o.screenshot = out.string();
+    o.width = 800;
+    o.height = 500;
+    ASSERT_EQ(run_headless(o), 0);
+    auto in = OIIO::ImageInput::open(out.string());
+    ASSERT_TRUE(in);
+    const OIIO::ImageSpec spec = in->spec();
+    EXPECT_EQ(spec.width, 800);
+    EXPECT_EQ(spec.height, 500);
+    std::vector<unsigned char> px(size_t(spec.width) * spec.height * spec.nchannels);
+    in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8, px.data());
+    // Not blank: many distinct grey levels (panels, text, the rendered image).
+    std::vector<int> seen(256, 0);
+    for (size_t i = 0; i < px.size(); i += size_t(spec.nchannels)) seen[px[i]] = 1;
+    int distinct = 0;
+    for (int v : seen) distinct += v;
+    EXPECT_GT(distinct, 64);
+}
+
+int main(int argc, char** argv) {
+    unsetenv("DISPLAY");  // the gl label must never need a display
+    ::testing::InitGoogleTest(&argc, argv);
+    return RUN_ALL_TESTS();
+}
