@@ -10,6 +10,7 @@
 #include "base/error.h"
 #include "base/file_io.h"
 #include "image/colormap.h"
+#include "image/figure.h"
 #include "image/image_io.h"
 #include "image/metrics.h"
 #include "render/direct_lighting.h"
@@ -239,6 +240,24 @@ int run_compare(const CompareArgs& args) {
     out["relmse_form"] = "mean((I-R)^2/(R+0.01)^2)";
     out["layer"] = args.layer;
     std::cout << out.dump(2) << std::endl;
+    return 0;
+}
+
+int run_figure(const FigureArgs& args) {
+    const ExrFile file = read_exr(args.input);
+    FigureSpec spec;
+    spec.layer = args.layer;
+    spec.scale = args.scale;
+    spec.title = args.title;
+    spec.display.exposure_ev = args.exposure;
+    for (const std::string& text : args.insets) {
+        FigureInset in;
+        if (std::sscanf(text.c_str(), "%d,%d,%d,%d", &in.x, &in.y, &in.width, &in.height) != 4)
+            throw Error("--inset", text, "expected X,Y,W,H in layer pixels");
+        spec.insets.push_back(in);
+    }
+    write_figure(args.out, file.layers, spec);
+    std::fprintf(stderr, "wrote %s\n", args.out.c_str());
     return 0;
 }
 

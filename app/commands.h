@@ -29,6 +29,17 @@ struct CompareArgs {
 };
 int run_compare(const CompareArgs& args);
 
+struct FigureArgs {
+    std::string input;  // an EXR written by freqlab (or any EXR)
+    std::string layer = "color";
+    std::vector<std::string> insets;  // "X,Y,W,H"
+    int scale = 2;
+    float exposure = 0.0f;
+    std::string title;
+    std::string out;
+};
+int run_figure(const FigureArgs& args);
+
 // Frames "A:B" → [A, B); "N" → [N, N+1). Throws Error naming --frames.
 std::pair<int, int> parse_frame_range(const std::string& text, int frame_count);
 // "WxH" → (W, H).

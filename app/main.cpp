@@ -97,6 +97,17 @@ int main(int argc, char** argv) {
                         "comma-separated: rmse,relmse,ssim,max_abs,nonfinite");
     compare->add_option("--layer", c.layer, "layer to compare (default color)");
 
+    freqlab::FigureArgs fa;
+    auto* figure =
+        app.add_subcommand("figure", "a paper figure from an EXR: image, insets, colorbar");
+    figure->add_option("input", fa.input, "EXR written by render")->required();
+    figure->add_option("--layer", fa.layer, "layer to show (default color)");
+    figure->add_option("--inset", fa.insets, "X,Y,W,H zoomed inset (up to 4)");
+    figure->add_option("--scale", fa.scale, "magnification of the main image (default 2)");
+    figure->add_option("--exposure", fa.exposure, "EV for colour layers");
+    figure->add_option("--title", fa.title, "title text");
+    figure->add_option("--out", fa.out, "output PNG")->required();
+
     auto* tables =
         app.add_subcommand("tables", "tabulate / query the impulse-response tables (to come)");
     tables->allow_extras();
@@ -109,6 +120,7 @@ int main(int argc, char** argv) {
     try {
         if (*render) return freqlab::run_render(r);
         if (*compare) return freqlab::run_compare(c);
+        if (*figure) return freqlab::run_figure(fa);
         if (*tables) return not_yet("tables");
         if (*bake) return not_yet("bake");
         if (*bench) return not_yet("bench");

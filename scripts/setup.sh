@@ -9,7 +9,7 @@ packages=(
   libembree-dev libopenexr-dev libopenimageio-dev libglm-dev libglfw3-dev libosmesa6-dev
   libimgui-dev libfftw3-dev libtbb-dev nlohmann-json3-dev libassimp-dev libgtest-dev
   libbenchmark-dev libboost-math-dev libcli11-dev python3-glad xvfb xauth
-  blender-data assimp-testmodels
+  blender-data assimp-testmodels fonts-dejavu-core
 )
 missing=()
 for p in "${packages[@]}"; do

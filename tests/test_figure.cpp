@@ -1,0 +1,75 @@
+// Figures: the main image and the insets are nearest-neighbour copies of the layer's display
+// colours, insets are framed in their colour, bad insets are errors.
+#include <gtest/gtest.h>
+
+#include "base/error.h"
+#include "image/figure.h"
+
+using namespace freqlab;
+
+namespace {
+
+LayerSet gradient(int w, int h) {
+    LayerSet s(w, h);
+    Layer& d = s.add("depth", LayerKind::Continuous, 1);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) d.at(w, x, y) = float(x + 3 * y);
+    return s;
+}
+
+}  // namespace
+
+TEST(Figure, MainImageAndInsetsAreExactCopies) {
+    const LayerSet set = gradient(64, 40);
+    FigureSpec spec;
+    spec.layer = "depth";
+    spec.scale = 3;
+    spec.title = "depth, frame 0";
+    spec.insets = {{5, 6, 10, 8}, {40, 20, 16, 16}};
+    const FigureImage fig = compose_figure(set, spec);
+    const std::vector<unsigned char> src = layer_to_rgb8(set, set.get("depth"), spec.display);
+    auto fig_px = [&](int x, int y) { return &fig.rgb[(size_t(y) * fig.width + x) * 3]; };
+    auto src_px = [&](int x, int y) { return &src[(size_t(y) * 64 + x) * 3]; };
+    EXPECT_EQ(fig.main.x1 - fig.main.x0, 192);
+    EXPECT_EQ(fig.main.y1 - fig.main.y0, 120);
+    // Main image: pixel (x, y) of the layer covers a 3x3 block.
+    for (auto [x, y] : {std::pair{0, 0}, {17, 3}, {63, 39}}) {
+        // Avoid the inset frames drawn on the main image.
+        const unsigned char* f = fig_px(fig.main.x0 + 3 * x + 1, fig.main.y0 + 3 * y + 1);
+        const unsigned char* s = src_px(x, y);
+        EXPECT_TRUE(f[0] == s[0] && f[1] == s[1] && f[2] == s[2]) << x << "," << y;
+    }
+    ASSERT_EQ(fig.inset_panels.size(), 2u);
+    // Second inset: 16x16 layer pixels shown in a panel; its centre shows layer pixel (48, 28).
+    const auto& p = fig.inset_panels[1];
+    const int cx = p.x0 + (p.x1 - p.x0) * 17 / 32, cy = p.y0 + (p.y1 - p.y0) * 17 / 32;
+    const unsigned char* f = fig_px(cx, cy);
+    const unsigned char* s = src_px(40 + 8, 20 + 8);
+    EXPECT_TRUE(f[0] == s[0] && f[1] == s[1] && f[2] == s[2]);
+    // Its frame has the inset's colour, on the panel and on the main image.
+    const vec3 c = categorical(2);
+    const unsigned char* frame_px = fig_px(p.x0 - 1, cy);
+    EXPECT_EQ(int(frame_px[0]), int(std::lround(c.r * 255)));
+    const unsigned char* on_main = fig_px(fig.main.x0 + 40 * 3 - 1, fig.main.y0 + 25 * 3);
+    EXPECT_EQ(int(on_main[1]), int(std::lround(c.g * 255)));
+}
+
+TEST(Figure, BadInsetsAndLayersAreErrors) {
+    const LayerSet set = gradient(32, 32);
+    FigureSpec spec;
+    spec.layer = "depth";
+    spec.insets = {{30, 30, 8, 8}};
+    try {
+        compose_figure(set, spec);
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_EQ(e.field(), "insets[0]");
+    }
+    spec.insets.clear();
+    spec.layer = "nope";
+    EXPECT_THROW(compose_figure(set, spec), Error);
+    spec.layer = "depth";
+    spec.font = "/nonexistent/font.ttf";
+    spec.title = "x";
+    EXPECT_THROW(compose_figure(set, spec), Error);
+}
