@@ -71,7 +71,11 @@ int main(int argc, char** argv) {
     std::vector<std::string> gui_sets;
     gui->add_option("--method", gui_method, "gbuffer|mis|reference");
     gui->add_option("--set", gui_sets, "key=value setting (repeatable)");
-    std::string gui_inspect, gui_warm;
+    std::string gui_inspect, gui_warm, gui_session;
+    bool gui_compare = false;
+    gui->add_flag("--compare", gui_compare, "render the frame's reference and show the split view");
+    gui->add_option("--session", gui_session,
+                    "session JSON to load (File > Save session writes one)");
     gui->add_option("--inspect", gui_inspect, "X,Y: select this pixel in the inspector");
     gui->add_option("--warm-from", gui_warm, "render frames from this one up to --frame first");
 
@@ -133,6 +137,8 @@ int main(int argc, char** argv) {
         options.layer = overlay;
         options.screenshot = screenshot;
         options.settings = gui_sets;
+        options.session = gui_session;
+        options.compare = gui_compare;
         if (!gui_inspect.empty()) {
             if (std::sscanf(gui_inspect.c_str(), "%d,%d", &options.inspect_x, &options.inspect_y) !=
                 2)

@@ -13,3 +13,5 @@ shot timeline_stats.png builtin:default --method mis --set mis.spp=8 --set frame
      --set frame.height=180 --warm-from 0 --frame 23
 xvfb-run -a -s "-screen 0 1280x800x24" "$bin" gui scenes/creatures.json --method mis \
      --set mis.spp=16 --overlay normal --screenshot screenshots/window_creatures_normals.png
+shot compare_split.png scenes/rotor.json --method mis --set mis.spp=4 --set reference.spp=256 \
+     --set frame.width=480 --set frame.height=270 --frame 0 --compare

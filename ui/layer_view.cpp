@@ -78,9 +78,10 @@ LayerView::~LayerView() {
     glDeleteProgram(program_);
 }
 
-DisplayRange LayerView::render(const LayerSet& set, const Layer& layer,
-                               const DisplayParams& params) {
-    const int w = set.width(), h = set.height();
+DisplayRange LayerView::render(const LayerSet& set, const Layer& layer, const DisplayParams& params,
+                               int out_width, int out_height) {
+    const int lw = set.width(), lh = set.height();
+    const int w = out_width > 0 ? out_width : lw, h = out_height > 0 ? out_height : lh;
     const bool vector = layer.channels >= 3 && layer.kind != LayerKind::Color;
     const int mode = layer.kind == LayerKind::Color        ? 0
                      : vector                              ? 4
@@ -93,12 +94,12 @@ DisplayRange LayerView::render(const LayerSet& set, const Layer& layer,
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     if (layer.channels >= 3) {
         // Pack to RGB (ignoring a 4th channel) for one upload path.
-        std::vector<float> rgb(size_t(w) * h * 3);
-        for (size_t p = 0; p < size_t(w) * h; ++p)
+        std::vector<float> rgb(size_t(lw) * lh * 3);
+        for (size_t p = 0; p < size_t(lw) * lh; ++p)
             for (int c = 0; c < 3; ++c) rgb[3 * p + c] = layer.data[p * layer.channels + c];
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB32F, w, h, 0, GL_RGB, GL_FLOAT, rgb.data());
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB32F, lw, lh, 0, GL_RGB, GL_FLOAT, rgb.data());
     } else {
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, w, h, 0, GL_RED, GL_FLOAT, layer.data.data());
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, lw, lh, 0, GL_RED, GL_FLOAT, layer.data.data());
     }
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);

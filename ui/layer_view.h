@@ -18,7 +18,9 @@ class LayerView {
     LayerView& operator=(const LayerView&) = delete;
 
     // Uploads `layer` and renders its display colours; returns the range that was used.
-    DisplayRange render(const LayerSet& set, const Layer& layer, const DisplayParams& params);
+    // The output is the layer's size unless out_width/out_height ask for another (nearest).
+    DisplayRange render(const LayerSet& set, const Layer& layer, const DisplayParams& params,
+                        int out_width = 0, int out_height = 0);
     unsigned texture() const { return output_; }
     int width() const { return width_; }
     int height() const { return height_; }

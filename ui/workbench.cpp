@@ -1,5 +1,7 @@
 #include "workbench.h"
 
+#include "workbench_state.h"
+
 #include <glad/gl.h>
 #include <imgui.h>
 #include <imgui_impl_opengl3.h>
@@ -27,46 +29,6 @@ namespace freqlab::ui {
 
 namespace fs = std::filesystem;
 
-struct Workbench::State {
-    WorkbenchOptions options;
-    Scene scene;
-    RenderConfig config;
-    std::unique_ptr<EmbreeDevice> device;
-    std::unique_ptr<FrameRenderer> renderer;
-    std::unique_ptr<Job> job;
-    int job_frame = -1;
-
-    mutable std::mutex results_mutex;
-    std::map<int, FrameResult> results;  // rendered frames: scrubbing back is instant
-
-    int frame = 0;
-    bool playing = false;
-    int play_ticks = 0;
-    std::string layer_name = "color";
-    bool overlay_on_color = false;
-    float overlay_opacity = 0.6f;
-    bool fixed_range = false;
-    DisplayRange range{0, 1};
-    int stat_index = 0;
-
-    LayerView view, base_view;  // shown layer; colour under an overlay
-    int shown_frame = -1;
-    bool view_dirty = true;
-    DisplayRange shown_range;
-    const FrameResult* shown = nullptr;
-
-    float zoom = 1.0f;          // 1 = fit
-    ImVec2 centre{0.5f, 0.5f};  // uv at the viewport centre
-    int pick_x = -1, pick_y = -1;
-    ScreenRect image_rect, colorbar_rect;
-    std::vector<std::pair<std::string, ScreenRect>> legend;
-    std::string error, status;
-};
-
-namespace {
-
-const char* kStats[] = {"time_ms", "rays", "pixels_shaded"};
-
 void restart_renderer(Workbench::State& s) {
     s.job.reset();  // cancels and joins
     {
@@ -77,7 +39,19 @@ void restart_renderer(Workbench::State& s) {
     s.shown_frame = -1;
     s.error.clear();
     if (s.device) s.renderer = std::make_unique<FrameRenderer>(s.scene, s.config, *s.device);
+    // References depend on the settings too: drop them with the frames.
+    s.reference_job.reset();
+    s.reference_renderer.reset();
+    {
+        std::lock_guard<std::mutex> lock(s.results_mutex);
+        s.references.clear();
+    }
+    s.metrics.clear();
 }
+
+namespace {
+
+const char* kStats[] = {"time_ms", "rays", "pixels_shaded"};
 
 void start_job_if_needed(Workbench::State& s) {
     if (s.job && !s.job->done()) return;
@@ -125,6 +99,7 @@ void draw_settings_panel(Workbench::State& s) {
     else if (changed & kInvalidatesDisplay)
         s.view_dirty = true;
 
+    draw_compare_panel(s);
     if (ImGui::CollapsingHeader("Help")) {
         ImGui::TextWrapped(
             "Space: play / pause    Left / Right: previous / next frame\n"
@@ -184,40 +159,6 @@ void draw_colorbar(Workbench::State& s, const Layer& layer, ImVec2 origin, float
     ImGui::Dummy(ImVec2(width, h + 24));
 }
 
-void export_current(Workbench::State& s, const char* what) {
-    if (!s.shown) return;
-    const fs::path dir = fs::path("freqlab-out") / "exports";
-    fs::create_directories(dir);
-    char stem[96];
-    std::snprintf(stem, sizeof stem, "%s_frame%04d_%s", s.scene.name.c_str(), s.shown->frame,
-                  s.layer_name.c_str());
-    try {
-        if (std::string(what) == "png") {
-            const std::vector<unsigned char> rgba = s.view.read_rgba();
-            std::vector<unsigned char> rgb(rgba.size() / 4 * 3);
-            for (size_t p = 0; p < rgba.size() / 4; ++p)
-                for (int c = 0; c < 3; ++c) rgb[3 * p + c] = rgba[4 * p + c];
-            write_png(dir / (std::string(stem) + ".png"), s.view.width(), s.view.height(), rgb);
-            s.status = "wrote " + (dir / (std::string(stem) + ".png")).string();
-        } else if (std::string(what) == "exr") {
-            write_exr(dir / (std::string(stem) + ".exr"), s.shown->layers,
-                      {{"scene", s.scene.source}, {"frame", s.shown->frame}});
-            s.status = "wrote " + (dir / (std::string(stem) + ".exr")).string();
-        } else {
-            std::string csv = "frame,time_ms,rays,pixels_shaded\n";
-            std::lock_guard<std::mutex> lock(s.results_mutex);
-            for (const auto& [f, r] : s.results)
-                csv += std::to_string(f) + "," + std::to_string(r.stats["time_ms"].get<double>()) +
-                       "," + std::to_string(r.stats["rays"].get<long>()) + "," +
-                       std::to_string(r.stats["pixels_shaded"].get<long>()) + "\n";
-            write_text_atomically(dir / (s.scene.name + "_stats.csv"), csv);
-            s.status = "wrote " + (dir / (s.scene.name + "_stats.csv")).string();
-        }
-    } catch (const Error& e) {
-        s.error = e.what();
-    }
-}
-
 void draw_viewport(Workbench::State& s) {
     if (!s.error.empty()) {
         ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1, 0.4f, 0.4f, 1));
@@ -269,6 +210,7 @@ void draw_viewport(Workbench::State& s) {
         if (!s.fixed_range) s.range = s.shown_range;
         if (s.overlay_on_color && layer->kind != LayerKind::Color)
             s.base_view.render(L, L.get("color"), params);
+        render_reference_view(s, params);
         s.view_dirty = false;
     }
 
@@ -292,12 +234,25 @@ void draw_viewport(Workbench::State& s) {
         ImGui::Image(reinterpret_cast<ImTextureID>(intptr_t(s.view.texture())), size, uv0, uv1);
     }
     s.image_rect = {origin.x, origin.y, origin.x + size.x, origin.y + size.y};
+    const bool item_hovered = ImGui::IsItemHovered();
+    if (s.split && s.references.count(s.shown->frame)) {
+        // Split view: the reference's colour right of the split, same zoom and pan.
+        const float split_u = uv0.x + s.split_position * (uv1.x - uv0.x);
+        const ImVec2 a(origin.x + s.split_position * size.x, origin.y);
+        ImGui::GetWindowDrawList()->AddImage(
+            reinterpret_cast<ImTextureID>(intptr_t(s.reference_view.texture())), a,
+            ImVec2(origin.x + size.x, origin.y + size.y), ImVec2(split_u, uv0.y), uv1);
+        ImGui::GetWindowDrawList()->AddLine(a, ImVec2(a.x, origin.y + size.y),
+                                            IM_COL32(255, 255, 255, 255), 1.5f);
+        ImGui::GetWindowDrawList()->AddText(ImVec2(a.x + 6, origin.y + 4),
+                                            IM_COL32(255, 255, 255, 255), "reference");
+    }
     const ImGuiIO& io = ImGui::GetIO();
     auto mouse_uv = [&] {
         return ImVec2(uv0.x + (io.MousePos.x - origin.x) / size.x * (uv1.x - uv0.x),
                       uv0.y + (io.MousePos.y - origin.y) / size.y * (uv1.y - uv0.y));
     };
-    if (ImGui::IsItemHovered()) {
+    if (item_hovered) {
         if (ImGui::IsMouseClicked(0)) {
             const ImVec2 uv = mouse_uv();
             s.pick_x = std::clamp(int(uv.x * L.width()), 0, L.width() - 1);
@@ -397,26 +352,48 @@ void draw_timeline(Workbench::State& s) {
 }  // namespace
 
 Workbench::Workbench(const WorkbenchOptions& options) : s_(std::make_unique<State>()) {
+    reset(options);
+}
+
+void Workbench::reset(const WorkbenchOptions& options) {
     State& s = *s_;
+    s.job.reset();
+    s.reference_job.reset();
+    s.reference_renderer.reset();
+    {
+        std::lock_guard<std::mutex> lock(s.results_mutex);
+        s.results.clear();
+        s.references.clear();
+    }
+    s.metrics.clear();
+    s.shown = nullptr;
     s.options = options;
-    if (!options.layer.empty()) s.layer_name = options.layer;
+    s.config = RenderConfig{};
+    s.layer_name = options.layer.empty() ? "color" : options.layer;
     if (!options.show_timings) s.stat_index = 1;  // rays: the same on every host
+    s.split = options.compare;
+    s.pick_x = options.inspect_x;
+    s.pick_y = options.inspect_y;
+    s.error.clear();
     try {
         s.scene = load_scene(options.scene);
         s.config.method = parse_render_method(options.method);
         SettingsGroup group = s.config.settings_group();
         for (const std::string& a : options.settings) group.apply_assignment(a);
         s.frame = std::clamp(options.frame, 0, s.scene.frame_count - 1);
-        s.device = std::make_unique<EmbreeDevice>(0);
+        if (!s.device) s.device = std::make_unique<EmbreeDevice>(0);
         restart_renderer(s);
     } catch (const Error& e) {
         s.error = e.what();
+        s.scene = Scene{};
         s.scene.frame_count = 1;
+        s.renderer.reset();
     }
 }
 
 Workbench::~Workbench() {
     s_->job.reset();
+    s_->reference_job.reset();
 }
 
 void Workbench::draw(int fb_w, int fb_h) {
@@ -436,14 +413,11 @@ void Workbench::draw(int fb_w, int fb_h) {
     }
 
     if (ImGui::BeginMainMenuBar()) {
-        if (ImGui::BeginMenu("Export")) {
-            if (ImGui::MenuItem("Layer as PNG")) export_current(s, "png");
-            if (ImGui::MenuItem("All layers as EXR")) export_current(s, "exr");
-            if (ImGui::MenuItem("Stats as CSV")) export_current(s, "csv");
-            ImGui::EndMenu();
-        }
+        draw_session_menu(*this, s);
+        draw_export_menu(s);
         ImGui::EndMainMenuBar();
     }
+    poll_reference(s);
 
     if (s.playing && ++s.play_ticks >= 2) {  // advance when the next frame is ready
         s.play_ticks = 0;
@@ -600,6 +574,19 @@ int run_loop(GlHost& host, Workbench& wb, const WorkbenchOptions& options, bool 
         wb.set_frame(options.frame);
     }
     if (options.inspect_x >= 0) wb.select_pixel(options.inspect_x, options.inspect_y);
+    if (options.compare) {
+        for (int i = 0; i < 1000 && !wb.frame_shown(); ++i) {
+            wb.wait_for_render();
+            render_ui_frame(host, wb);
+            host.end_frame();
+        }
+        wb.request_reference();
+        for (int i = 0; i < 100000 && (wb.reference_busy() || !wb.metrics()); ++i) {
+            render_ui_frame(host, wb);
+            host.end_frame();
+            if (!wb.error().empty()) break;
+        }
+    }
     for (;;) {
         if (interactive && host.should_close()) return 0;
         if (!interactive && !wb.frame_shown()) wb.wait_for_render();
@@ -640,6 +627,7 @@ int run_workbench(const WorkbenchOptions& options) {
     int code;
     {
         Workbench wb(options);
+        if (!options.session.empty()) wb.load_session(options.session);
         code = run_loop(host, wb, options, true);
     }
     ImGui_ImplOpenGL3_Shutdown();
@@ -656,6 +644,7 @@ int run_headless(const WorkbenchOptions& options) {
     int code;
     {
         Workbench wb(options);
+        if (!options.session.empty()) wb.load_session(options.session);
         code = run_loop(host, wb, options, false);
     }
     ImGui_ImplOpenGL3_Shutdown();

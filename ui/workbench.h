@@ -13,6 +13,7 @@
 
 #include "image/colormap.h"
 #include "image/layers.h"
+#include "image/metrics.h"
 
 namespace freqlab::ui {
 
@@ -32,6 +33,8 @@ struct WorkbenchOptions {
     // Wall-clock timings on screen (status line, stats strip, inspector). Off gives pictures
     // that depend only on the state: what tests compare across hosts.
     bool show_timings = true;
+    std::string session;   // a session JSON to load at start (overrides the fields above)
+    bool compare = false;  // render the reference of the frame and show the split view
 };
 
 struct ScreenRect {
@@ -67,6 +70,17 @@ class Workbench {
     ScreenRect colorbar_rect() const;           // the colorbar's gradient (empty if none)
     std::vector<std::pair<std::string, ScreenRect>> legend_swatches() const;
     const std::string& error() const;
+
+    // Sessions: scene, method, settings, frame, layer, display, view, inspector, insets as JSON.
+    void save_session(const std::string& path) const;
+    void load_session(const std::string& path);   // throws Error naming file and field
+    void reset(const WorkbenchOptions& options);  // reloads the scene; errors show in the UI
+
+    // Compare: render the reference of the shown frame in the background; when it arrives the
+    // frame gains layers reference, error, relative_error and metrics() answers.
+    void request_reference();
+    bool reference_busy() const;
+    const ImageMetrics* metrics() const;
 
     struct State;  // defined in workbench.cpp; public so its helper functions can name it
 

@@ -10,6 +10,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+
+#include "base/error.h"
 
 #include "gl_host.h"
 #include "image/colormap.h"
@@ -220,6 +223,78 @@ TEST(GlWorkbench, HeadlessScreenshotHasTheRequestedSizeAndContent) {
     int distinct = 0;
     for (int v : seen) distinct += v;
     EXPECT_GT(distinct, 64);
+}
+
+TEST(GlWorkbench, CompareAddsErrorLayersAndMetrics) {
+    setenv("FREQLAB_CACHE_DIR", (fs::temp_directory_path() / "freqlab_gl_cache").c_str(), 1);
+    GlSession gl;
+    WorkbenchOptions o = small_scene("color");
+    o.method = "mis";
+    o.settings.push_back("mis.spp=2");
+    o.settings.push_back("reference.spp=64");
+    Workbench wb(o);
+    run_until_shown(gl, wb);
+    wb.request_reference();
+    for (int i = 0; i < 2000 && (wb.reference_busy() || !wb.metrics()); ++i)
+        render_ui_frame(*gl.host, wb);
+    ASSERT_NE(wb.metrics(), nullptr) << wb.error();
+    const LayerSet* L = wb.layers();
+    ASSERT_NE(L->find("reference"), nullptr);
+    ASSERT_NE(L->find("error"), nullptr);
+    // The error layer is luminance(colour) - luminance(reference), pixel by pixel.
+    const Layer &c = L->get("color"), &r = L->get("reference"), &e = L->get("error");
+    for (size_t p : {size_t(0), size_t(5000), L->pixel_count() - 1}) {
+        const vec3 cv(c.data[3 * p], c.data[3 * p + 1], c.data[3 * p + 2]);
+        const vec3 rv(r.data[3 * p], r.data[3 * p + 1], r.data[3 * p + 2]);
+        EXPECT_FLOAT_EQ(e.data[p], luminance(cv) - luminance(rv));
+    }
+    // The metrics shown are those of compare on the two colour layers; 2 spp is noisy.
+    LayerSet test(L->width(), L->height()), ref(L->width(), L->height());
+    test.add("color", LayerKind::Color, 3).data = c.data;
+    ref.add("color", LayerKind::Color, 3).data = r.data;
+    const ImageMetrics m = compare_layers(test, ref);
+    EXPECT_DOUBLE_EQ(wb.metrics()->rmse, m.rmse);
+    EXPECT_DOUBLE_EQ(wb.metrics()->ssim, m.ssim);
+    EXPECT_GT(m.rmse, 0.0);
+    EXPECT_LT(m.ssim, 1.0);
+}
+
+TEST(GlWorkbench, SessionRoundTrip) {
+    const fs::path path = fs::temp_directory_path() / "freqlab_session.json";
+    GlSession gl;
+    {
+        WorkbenchOptions o = small_scene("depth");
+        o.frame = 3;
+        o.settings.push_back("frame.exposure=-1.5");
+        Workbench wb(o);
+        run_until_shown(gl, wb);
+        wb.select_pixel(20, 30);
+        wb.save_session(path.string());
+    }
+    Workbench wb(WorkbenchOptions{});
+    wb.load_session(path.string());
+    run_until_shown(gl, wb);
+    EXPECT_EQ(wb.frame(), 3);
+    ASSERT_NE(wb.layers(), nullptr);
+    EXPECT_EQ(wb.layers()->width(), 160);  // frame.width came back from the session
+    const auto rows = wb.inspect();
+    ASSERT_FALSE(rows.empty());
+    EXPECT_EQ(rows[0].values[0], wb.layers()->get("color").at(160, 20, 30, 0));
+    // A damaged session names the field and leaves the workbench as it was.
+    {
+        std::ofstream(path)
+            << R"({"freqlab_session": 1, "scene": "builtin:default", "method": "mis",
+          "frame": 0, "layer": "color", "overlay_on_color": false, "overlay_opacity": 0.5,
+          "fixed_range": false, "range": [0, 1], "zoom": 1, "centre": [0.5, 0.5], "inspect": [-1, -1],
+          "insets": [], "settings": {"frame": {"width": "wide"}}})";
+    }
+    try {
+        wb.load_session(path.string());
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_EQ(e.field(), "settings.frame.width");
+    }
+    EXPECT_EQ(wb.frame(), 3);
 }
 
 int main(int argc, char** argv) {

@@ -1,0 +1,81 @@
+// The workbench's state, shared by its translation units (workbench.cpp draws the panels and
+// hosts; workbench_tools.cpp compares, exports and saves sessions). Private to ui/.
+#pragma once
+
+#include <imgui.h>
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "base/job.h"
+#include "image/figure.h"
+#include "image/metrics.h"
+#include "layer_view.h"
+#include "render/frame_renderer.h"
+#include "scene/scene.h"
+#include "workbench.h"
+
+namespace freqlab::ui {
+
+struct Workbench::State {
+    WorkbenchOptions options;
+    Scene scene;
+    RenderConfig config;
+    std::unique_ptr<EmbreeDevice> device;
+    std::unique_ptr<FrameRenderer> renderer;
+    std::unique_ptr<Job> job;
+    int job_frame = -1;
+
+    mutable std::mutex results_mutex;
+    std::map<int, FrameResult> results;  // rendered frames: scrubbing back is instant
+
+    int frame = 0;
+    bool playing = false;
+    int play_ticks = 0;
+    std::string layer_name = "color";
+    bool overlay_on_color = false;
+    float overlay_opacity = 0.6f;
+    bool fixed_range = false;
+    DisplayRange range{0, 1};
+    int stat_index = 0;
+
+    LayerView view, base_view;  // shown layer; colour under an overlay
+    int shown_frame = -1;
+    bool view_dirty = true;
+    DisplayRange shown_range;
+    const FrameResult* shown = nullptr;
+
+    float zoom = 1.0f;          // 1 = fit
+    ImVec2 centre{0.5f, 0.5f};  // uv at the viewport centre
+    int pick_x = -1, pick_y = -1;
+    ScreenRect image_rect, colorbar_rect;
+    std::vector<std::pair<std::string, ScreenRect>> legend;
+    std::string error, status;
+
+    // Compare against the reference (workbench_tools.cpp).
+    std::unique_ptr<FrameRenderer> reference_renderer;
+    std::unique_ptr<Job> reference_job;
+    int reference_job_frame = -1;
+    std::map<int, LayerSet> references;   // guarded by results_mutex
+    std::map<int, ImageMetrics> metrics;  // of the frame's colour against its reference
+    bool split = false;
+    float split_position = 0.5f;
+    LayerView reference_view;
+    std::vector<FigureInset> insets;  // for Export > Figure
+    std::string session_path = "freqlab-out/session.json";
+};
+
+void restart_renderer(Workbench::State& s);
+// Compare, exports and sessions (workbench_tools.cpp).
+void poll_reference(Workbench::State& s);
+void start_reference(Workbench::State& s);
+void render_reference_view(Workbench::State& s, const DisplayParams& params);
+void draw_compare_panel(Workbench::State& s);
+void draw_export_menu(Workbench::State& s);
+void draw_session_menu(Workbench& wb, Workbench::State& s);
+nlohmann::json session_to_json(const Workbench::State& s);
+
+}  // namespace freqlab::ui

@@ -1,0 +1,308 @@
+// The workbench's tools: comparison against the reference (split view, error layers,
+// RMSE / relMSE / SSIM), exports (layer PNG at a chosen magnification, all layers as EXR,
+// figures with insets, stats CSV) and sessions (save / load as JSON).
+#include <imgui.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "base/error.h"
+#include "base/file_io.h"
+#include "image/image_io.h"
+#include "scene/json_reader.h"
+#include "workbench_state.h"
+
+namespace freqlab::ui {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+const fs::path kExportDir = fs::path("freqlab-out") / "exports";
+
+// Adds reference, error and relative_error layers to a frame's result and measures it.
+void attach_reference(Workbench::State& s, int frame) {
+    auto it = s.results.find(frame);
+    auto ref = s.references.find(frame);
+    if (it == s.results.end() || ref == s.references.end()) return;
+    LayerSet& L = it->second.layers;
+    const Layer* ref_color = ref->second.find("color");
+    if (!ref_color || ref->second.width() != L.width() || ref->second.height() != L.height())
+        return;
+    const Layer& test = L.get("color");
+    Layer& r = L.add("reference", LayerKind::Color, 3, "reference render of this frame");
+    r.data = ref_color->data;
+    Layer& err = L.add("error", LayerKind::Signed, 1, "luminance(colour) - luminance(reference)");
+    Layer& rel = L.add("relative_error", LayerKind::Continuous, 1,
+                       "mean over RGB of |colour - reference| / (reference + 0.01)");
+    for (size_t p = 0; p < L.pixel_count(); ++p) {
+        const vec3 t(test.data[3 * p], test.data[3 * p + 1], test.data[3 * p + 2]);
+        const vec3 q(r.data[3 * p], r.data[3 * p + 1], r.data[3 * p + 2]);
+        err.data[p] = luminance(t) - luminance(q);
+        rel.data[p] = (std::fabs(t.x - q.x) / (q.x + 0.01f) + std::fabs(t.y - q.y) / (q.y + 0.01f) +
+                       std::fabs(t.z - q.z) / (q.z + 0.01f)) /
+                      3.0f;
+    }
+    LayerSet test_only(L.width(), L.height()), ref_only(L.width(), L.height());
+    test_only.add("color", LayerKind::Color, 3).data = test.data;
+    ref_only.add("color", LayerKind::Color, 3).data = ref_color->data;
+    s.metrics[frame] = compare_layers(test_only, ref_only);
+}
+
+std::string file_stem(const Workbench::State& s) {
+    char stem[128];
+    std::snprintf(stem, sizeof stem, "%s_frame%04d_%s", s.scene.name.c_str(),
+                  s.shown ? s.shown->frame : s.frame, s.layer_name.c_str());
+    return stem;
+}
+
+}  // namespace
+
+void poll_reference(Workbench::State& s) {
+    if (!s.reference_job || !s.reference_job->done()) return;
+    const ProgressSnapshot snap = s.reference_job->snapshot();
+    if (!snap.error.empty()) s.error = snap.error;
+    s.reference_job.reset();
+    std::lock_guard<std::mutex> lock(s.results_mutex);
+    attach_reference(s, s.reference_job_frame);
+    s.view_dirty = true;
+}
+
+void start_reference(Workbench::State& s) {
+    if (s.reference_job || !s.shown || !s.device) return;
+    const int frame = s.shown->frame;
+    if (!s.reference_renderer) {
+        RenderConfig rc = s.config;
+        rc.method = RenderMethod::Reference;
+        s.reference_renderer = std::make_unique<FrameRenderer>(s.scene, rc, *s.device);
+    }
+    s.reference_job_frame = frame;
+    Workbench::State* sp = &s;
+    s.reference_job = std::make_unique<Job>([sp, frame](Progress& progress) {
+        progress.set_stage_count(2);
+        FrameResult r = sp->reference_renderer->render(frame, progress);
+        std::lock_guard<std::mutex> lock(sp->results_mutex);
+        sp->references[frame] = std::move(r.layers);
+    });
+}
+
+void Workbench::request_reference() {
+    start_reference(*s_);
+}
+bool Workbench::reference_busy() const {
+    return s_->reference_job != nullptr;
+}
+const ImageMetrics* Workbench::metrics() const {
+    auto it = s_->metrics.find(s_->shown ? s_->shown->frame : -1);
+    return it == s_->metrics.end() ? nullptr : &it->second;
+}
+
+void draw_compare_panel(Workbench::State& s) {
+    if (!ImGui::CollapsingHeader("Compare with reference",
+                                 s.split ? ImGuiTreeNodeFlags_DefaultOpen : 0))
+        return;
+    const int frame = s.shown ? s.shown->frame : -1;
+    bool have = false;
+    {
+        std::lock_guard<std::mutex> lock(s.results_mutex);
+        have = s.references.count(frame) > 0;
+        // A reference that arrived before its frame's result: attach it now.
+        if (have && s.shown && !s.shown->layers.find("reference")) attach_reference(s, frame);
+    }
+    if (s.reference_job) {
+        const ProgressSnapshot p = s.reference_job->snapshot();
+        ImGui::Text("reference of frame %d: %.0f%%", s.reference_job_frame, 100 * p.fraction);
+        ImGui::SameLine();
+        if (ImGui::SmallButton("cancel##ref")) s.reference_job->cancel();
+    } else if (!have && frame >= 0 && ImGui::Button("Render reference of this frame")) {
+        start_reference(s);
+    }
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip(
+            "reference.spp samples per pixel; cached on disk, so a second request "
+            "of the same frame and settings is instant");
+    auto m = s.metrics.find(frame);
+    if (m != s.metrics.end()) {
+        ImGui::Text("RMSE   %.5f", m->second.rmse);
+        ImGui::Text("relMSE %.5f", m->second.relmse);
+        ImGui::Text("SSIM   %.4f", m->second.ssim);
+        ImGui::Checkbox("split view", &s.split);
+        if (s.split) ImGui::SliderFloat("split", &s.split_position, 0.0f, 1.0f);
+        ImGui::TextDisabled("layers: reference, error, relative_error");
+    }
+}
+
+void render_reference_view(Workbench::State& s, const DisplayParams& params) {
+    auto it = s.references.find(s.shown ? s.shown->frame : -1);
+    if (it != s.references.end())
+        s.reference_view.render(it->second, it->second.get("color"), params);
+}
+
+void draw_export_menu(Workbench::State& s) {
+    if (!ImGui::BeginMenu("Export")) return;
+    try {
+        if (s.shown) {
+            const LayerSet& L = s.shown->layers;
+            const Layer& layer = L.get(s.layer_name);
+            DisplayParams params;
+            params.exposure_ev = s.config.frame.exposure;
+            params.auto_range = !s.fixed_range;
+            params.range = s.range;
+            for (int scale : {1, 2, 4}) {
+                char label[48];
+                std::snprintf(label, sizeof label, "Layer as PNG (%dx%d)", L.width() * scale,
+                              L.height() * scale);
+                if (!ImGui::MenuItem(label)) continue;
+                // Rendered offscreen at the requested size by the same shader as the screen.
+                LayerView offscreen;
+                offscreen.render(L, layer, params, L.width() * scale, L.height() * scale);
+                const std::vector<unsigned char> rgba = offscreen.read_rgba();
+                std::vector<unsigned char> rgb(rgba.size() / 4 * 3);
+                for (size_t p = 0; p < rgba.size() / 4; ++p)
+                    for (int c = 0; c < 3; ++c) rgb[3 * p + c] = rgba[4 * p + c];
+                fs::create_directories(kExportDir);
+                const fs::path out =
+                    kExportDir / (file_stem(s) + "_x" + std::to_string(scale) + ".png");
+                write_png(out, offscreen.width(), offscreen.height(), rgb);
+                s.status = "wrote " + out.string();
+            }
+            if (ImGui::MenuItem("All layers as EXR")) {
+                fs::create_directories(kExportDir);
+                const fs::path out = kExportDir / (file_stem(s) + ".exr");
+                write_exr(out, L, {{"scene", s.scene.source}, {"frame", s.shown->frame}});
+                s.status = "wrote " + out.string();
+            }
+            if (ImGui::MenuItem("Add inset at the inspected pixel", nullptr, false,
+                                s.pick_x >= 0 && s.insets.size() < 4)) {
+                const int w = std::max(8, L.width() / 10), h = std::max(8, L.height() / 10);
+                s.insets.push_back({std::clamp(s.pick_x - w / 2, 0, L.width() - w),
+                                    std::clamp(s.pick_y - h / 2, 0, L.height() - h), w, h});
+            }
+            if (ImGui::MenuItem("Clear insets", nullptr, false, !s.insets.empty()))
+                s.insets.clear();
+            char fig_label[64];
+            std::snprintf(fig_label, sizeof fig_label, "Figure (%zu inset%s)", s.insets.size(),
+                          s.insets.size() == 1 ? "" : "s");
+            if (ImGui::MenuItem(fig_label)) {
+                FigureSpec spec;
+                spec.layer = s.layer_name;
+                spec.display = params;
+                spec.insets = s.insets;
+                spec.title = s.scene.name + ", frame " + std::to_string(s.shown->frame) + ", " +
+                             s.layer_name;
+                fs::create_directories(kExportDir);
+                const fs::path out = kExportDir / (file_stem(s) + "_figure.png");
+                write_figure(out, L, spec);
+                s.status = "wrote " + out.string();
+            }
+        }
+        if (ImGui::MenuItem("Stats as CSV")) {
+            std::string csv = "frame,time_ms,rays,pixels_shaded\n";
+            {
+                std::lock_guard<std::mutex> lock(s.results_mutex);
+                for (const auto& [f, r] : s.results)
+                    csv += std::to_string(f) + "," +
+                           std::to_string(r.stats["time_ms"].get<double>()) + "," +
+                           std::to_string(r.stats["rays"].get<long>()) + "," +
+                           std::to_string(r.stats["pixels_shaded"].get<long>()) + "\n";
+            }
+            fs::create_directories(kExportDir);
+            write_text_atomically(kExportDir / (s.scene.name + "_stats.csv"), csv);
+            s.status = "wrote " + (kExportDir / (s.scene.name + "_stats.csv")).string();
+        }
+    } catch (const Error& e) {
+        s.error = e.what();
+    }
+    ImGui::EndMenu();
+}
+
+json session_to_json(const Workbench::State& s) {
+    RenderConfig config = s.config;
+    json insets = json::array();
+    for (const FigureInset& in : s.insets) insets.push_back({in.x, in.y, in.width, in.height});
+    return {{"freqlab_session", 1},
+            {"scene", s.options.scene},
+            {"method", render_method_names()[size_t(s.config.method)]},
+            {"frame", s.frame},
+            {"layer", s.layer_name},
+            {"overlay_on_color", s.overlay_on_color},
+            {"overlay_opacity", s.overlay_opacity},
+            {"fixed_range", s.fixed_range},
+            {"range", {s.range.lo, s.range.hi}},
+            {"zoom", s.zoom},
+            {"centre", {s.centre.x, s.centre.y}},
+            {"inspect", {s.pick_x, s.pick_y}},
+            {"insets", insets},
+            {"settings", config.settings_group().to_json()}};
+}
+
+void draw_session_menu(Workbench& wb, Workbench::State& s) {
+    if (!ImGui::BeginMenu("File")) return;
+    char path[512];
+    std::snprintf(path, sizeof path, "%s", s.session_path.c_str());
+    if (ImGui::InputText("session file", path, sizeof path)) s.session_path = path;
+    try {
+        if (ImGui::MenuItem("Save session")) {
+            wb.save_session(s.session_path);
+            s.status = "saved " + s.session_path;
+        }
+        if (ImGui::MenuItem("Load session")) wb.load_session(s.session_path);
+    } catch (const Error& e) {
+        s.error = e.what();
+    }
+    ImGui::EndMenu();
+}
+
+void Workbench::save_session(const std::string& path) const {
+    const fs::path p(path);
+    if (p.has_parent_path()) fs::create_directories(p.parent_path());
+    write_text_atomically(p, session_to_json(*s_).dump(2) + "\n");
+}
+
+void Workbench::load_session(const std::string& path) {
+    const json doc = JsonReader::parse(read_text_file(path), path);
+    const JsonReader r(doc, path, "");
+    r.only_keys({"freqlab_session", "scene", "method", "frame", "layer", "overlay_on_color",
+                 "overlay_opacity", "fixed_range", "range", "zoom", "centre", "inspect", "insets",
+                 "settings"});
+    if (r.get("freqlab_session").integer_in(1, 1) != 1) r.fail("unsupported session version");
+    WorkbenchOptions o = s_->options;
+    o.scene = r.get("scene").string();
+    o.method = r.get("method").one_of({"gbuffer", "mis", "reference"});
+    o.frame = r.get("frame").integer_in(0, 1 << 30);
+    o.layer = r.get("layer").string();
+    o.settings.clear();
+    // Validate the settings before anything changes: a bad file leaves the session as it was.
+    RenderConfig probe;
+    probe.settings_group().from_json(r.get("settings").raw(), path, "settings");
+    reset(o);
+    State& s = *s_;
+    s.config.settings_group().from_json(r.get("settings").raw(), path, "settings");
+    s.config.method = parse_render_method(o.method);
+    restart_renderer(s);
+    s.overlay_on_color = r.get("overlay_on_color").boolean();
+    s.overlay_opacity = float(r.get("overlay_opacity").number_in(0, 1));
+    s.fixed_range = r.get("fixed_range").boolean();
+    const JsonReader range = r.get("range");
+    s.range = {float(range.at(0).number()), float(range.at(1).number())};
+    s.zoom = float(r.get("zoom").number_in(1, 64));
+    const JsonReader centre = r.get("centre");
+    s.centre = ImVec2(float(centre.at(0).number_in(0, 1)), float(centre.at(1).number_in(0, 1)));
+    const JsonReader inspect = r.get("inspect");
+    s.pick_x = inspect.at(0).integer_in(-1, 1 << 20);
+    s.pick_y = inspect.at(1).integer_in(-1, 1 << 20);
+    s.insets.clear();
+    const JsonReader insets = r.get("insets");
+    for (size_t i = 0; i < insets.array_size() && i < 4; ++i) {
+        const JsonReader in = insets.at(i);
+        s.insets.push_back({in.at(0).integer_in(0, 1 << 20), in.at(1).integer_in(0, 1 << 20),
+                            in.at(2).integer_in(2, 1 << 20), in.at(3).integer_in(2, 1 << 20)});
+    }
+    s.session_path = path;
+    s.view_dirty = true;
+}
+
+}  // namespace freqlab::ui
