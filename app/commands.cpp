@@ -64,57 +64,6 @@ std::pair<int, int> parse_pixel(const std::string& text, int w, int h) {
     return {x, y};
 }
 
-// Re-runs the direct-lighting estimate of one pixel with every sample traced.
-void print_shading_trace(const FrameRenderer& renderer, const RenderConfig& config,
-                         const FrameResult& r, int x, int y) {
-    const RayScene& rs = renderer.ray_scene();
-    const CameraRayGenerator cam(rs.scene().camera.at(r.time_s), r.layers.width(),
-                                 r.layers.height());
-    const Ray ray{cam.origin,
-                  cam.direction((x + 0.5f) / r.layers.width(), (y + 0.5f) / r.layers.height())};
-    const SurfaceHit hit = rs.intersect(ray);
-    std::printf("  camera ray o = (%.4f, %.4f, %.4f) d = (%.4f, %.4f, %.4f)\n", ray.origin.x,
-                ray.origin.y, ray.origin.z, ray.direction.x, ray.direction.y, ray.direction.z);
-    if (!hit.valid) {
-        std::printf("  no hit: background radiance\n");
-        return;
-    }
-    DirectLighting lighting(rs, config.shading);
-    const ShadingPoint sp = lighting.shading_point(hit, -ray.direction);
-    std::printf("  hit object %d \"%s\" t = %.5f, material \"%s\" (%s), uv = (%.4f, %.4f)\n",
-                hit.object, rs.scene().objects[size_t(hit.object)].name.c_str(), hit.distance,
-                sp.material->name.c_str(), to_string(sp.material->type), hit.uv.x, hit.uv.y);
-    std::printf(
-        "  p = (%.5f, %.5f, %.5f) n_g = (%.4f, %.4f, %.4f) n_s = (%.4f, %.4f, %.4f) albedo = "
-        "(%.4f, %.4f, %.4f)\n",
-        sp.position.x, sp.position.y, sp.position.z, sp.geometric_normal.x, sp.geometric_normal.y,
-        sp.geometric_normal.z, sp.shading_normal.x, sp.shading_normal.y, sp.shading_normal.z,
-        sp.albedo.x, sp.albedo.y, sp.albedo.z);
-    if (sp.material->type == BrdfType::Mirror) {
-        std::printf("  perfect mirror: followed up to shading.mirror_depth = %d bounces\n",
-                    config.shading.mirror_depth);
-        return;
-    }
-    std::vector<DirectLighting::SampleTrace> samples;
-    lighting.trace_samples(&samples);
-    CounterRng rng(uint64_t(config.frame.seed) ^ kShadingStream, uint64_t(r.frame),
-                   size_t(y) * r.layers.width() + x, 0);
-    const RadianceEstimate e = lighting.estimate(sp, config.spp(), rng);
-    std::printf(
-        "  estimate (%.6g, %.6g, %.6g), variance %.4g, %ld shadow rays, %zu candidate samples\n",
-        e.radiance.x, e.radiance.y, e.radiance.z, e.variance, e.rays, samples.size());
-    std::printf("  %-5s %4s %-26s %10s %10s %7s %-30s %s\n", "strat", "unit", "direction", "pdf",
-                "other_pdf", "w_mis", "contribution (unoccluded)", "visible");
-    for (size_t k = 0; k < samples.size() && k < 48; ++k) {
-        const auto& t = samples[k];
-        std::printf("  %-5s %4d (%7.4f,%7.4f,%7.4f) %10.4g %10.4g %7.4f (%9.4g,%9.4g,%9.4g) %s\n",
-                    t.environment_strategy ? "env" : "brdf", t.unit, t.direction.x, t.direction.y,
-                    t.direction.z, t.pdf, t.other_pdf, t.mis_weight, t.contribution.x,
-                    t.contribution.y, t.contribution.z, t.occluded ? "occluded" : "yes");
-    }
-    if (samples.size() > 48) std::printf("  ... %zu more samples\n", samples.size() - 48);
-}
-
 void print_debug_pixel(const FrameResult& r, const Scene& scene, int x, int y) {
     std::printf("debug pixel (%d, %d), frame %d, t = %.4f s\n", x, y, r.frame, r.time_s);
     for (const Layer& l : r.layers.layers()) {
@@ -197,7 +146,9 @@ int run_render(const RenderArgs& args) {
             if (debug.first >= 0) {
                 print_debug_pixel(r, scene, debug.first, debug.second);
                 if (config.method != RenderMethod::GBuffer)
-                    print_shading_trace(renderer, config, r, debug.first, debug.second);
+                    for (const std::string& line :
+                         renderer.trace_pixel(r, debug.first, debug.second))
+                        std::printf("  %s\n", line.c_str());
             }
             frames.push_back(r.stats);
         }

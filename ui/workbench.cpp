@@ -31,6 +31,8 @@ namespace fs = std::filesystem;
 
 void restart_renderer(Workbench::State& s) {
     s.job.reset();  // cancels and joins
+    s.trace_lines.clear();
+    s.trace_pixel = {-1, -1};
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
         s.results.clear();
@@ -306,6 +308,22 @@ void draw_inspector(Workbench& wb, Workbench::State& s) {
     for (const auto& [key, value] : s.shown->stats.items())
         if (!value.is_object() && (s.options.show_timings || key != "time_ms"))
             ImGui::Text("%-14s %s", key.c_str(), value.dump().c_str());
+    // The method's record of this pixel: its estimate re-run with every sample traced.
+    ImGui::Separator();
+    // One pixel is cheap to re-run; it waits while a render job owns the renderer.
+    const bool idle = !s.job || s.job->done();
+    const std::pair<int, int> pick{s.pick_x, s.pick_y};
+    if (s.renderer && idle && (s.trace_pixel != pick || s.trace_frame != s.shown->frame)) {
+        s.trace_lines = s.renderer->trace_pixel(*s.shown, s.pick_x, s.pick_y, 32);
+        s.trace_pixel = pick;
+        s.trace_frame = s.shown->frame;
+    }
+    ImGui::TextDisabled("trace of this pixel's estimate");
+    if (!s.trace_lines.empty() && s.trace_pixel == pick) {
+        ImGui::BeginChild("trace", ImVec2(0, 0), true, ImGuiWindowFlags_HorizontalScrollbar);
+        for (const std::string& l : s.trace_lines) ImGui::TextUnformatted(l.c_str());
+        ImGui::EndChild();
+    }
 }
 
 void draw_timeline(Workbench::State& s) {

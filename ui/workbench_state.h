@@ -64,7 +64,10 @@ struct Workbench::State {
     bool split = false;
     float split_position = 0.5f;
     LayerView reference_view;
-    std::vector<FigureInset> insets;  // for Export > Figure
+    std::vector<FigureInset> insets;       // for Export > Figure
+    std::vector<std::string> trace_lines;  // the inspector's pixel trace
+    std::pair<int, int> trace_pixel{-1, -1};
+    int trace_frame = -1;
     std::string session_path = "freqlab-out/session.json";
 };
 

@@ -47,6 +47,10 @@ class FrameRenderer {
     FrameRenderer(const Scene& scene, const RenderConfig& config, const EmbreeDevice& device);
     FrameResult render(int frame, Progress& progress);
     const RayScene& ray_scene() const { return ray_scene_; }
+    // The estimate of pixel (x, y) of `result` re-run with every sample traced, as text lines
+    // (render/pixel_trace.cpp). Not while render() runs on another thread.
+    std::vector<std::string> trace_pixel(const FrameResult& result, int x, int y,
+                                         size_t max_samples = 48);
 
   private:
     const Scene& scene_;
