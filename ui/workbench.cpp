@@ -63,11 +63,19 @@ void start_job_if_needed(Workbench::State& s) {
         s.job.reset();
     }
     if (!s.renderer || !s.error.empty()) return;  // do not retry a failing render every frame
+    int frame = s.frame;
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
         if (s.results.count(s.frame)) return;
+        // Scrubbing forward with a method that carries state across frames renders every
+        // frame in between, in order; scrubbing back shows what is kept.
+        if (s.config.needs_previous_frames())
+            for (int f = 0; f < s.frame; ++f)
+                if (!s.results.count(f)) {
+                    frame = f;
+                    break;
+                }
     }
-    const int frame = s.frame;
     s.job_frame = frame;
     Workbench::State* sp = &s;
     s.job = std::make_unique<Job>([sp, frame](Progress& progress) {

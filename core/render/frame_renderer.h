@@ -31,6 +31,8 @@ struct RenderConfig {
     MisSettings mis;
     ReferenceSettings reference;
     int spp() const;  // the sample count of the chosen method (0 for gbuffer)
+    // Methods with state across frames (method A's cache) must render frames in order.
+    bool needs_previous_frames() const { return method == RenderMethod::Cache; }
     // All settings of this render under their "prefix.key" names (for --set, JSON, stats).
     SettingsGroup settings_group();
 };
