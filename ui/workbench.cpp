@@ -646,18 +646,26 @@ struct ImGuiSession {
 
 }  // namespace
 
-int run_workbench(const WorkbenchOptions& options) {
-    ImGuiSession imgui;
-    GlfwHost host(options.width, options.height, "freqlab — " + options.scene);
+namespace {
+
+int run_on_host(GlHost& host, const WorkbenchOptions& options, bool interactive) {
     ImGui_ImplOpenGL3_Init("#version 330");
     int code;
     {
         Workbench wb(options);
         if (!options.session.empty()) wb.load_session(options.session);
-        code = run_loop(host, wb, options, true);
+        code = run_loop(host, wb, options, interactive);
     }
     ImGui_ImplOpenGL3_Shutdown();
     return code;
+}
+
+}  // namespace
+
+int run_workbench(const WorkbenchOptions& options) {
+    ImGuiSession imgui;
+    GlfwHost host(options.width, options.height, "freqlab — " + options.scene);
+    return run_on_host(host, options, true);
 }
 
 int run_headless(const WorkbenchOptions& options) {
@@ -666,15 +674,7 @@ int run_headless(const WorkbenchOptions& options) {
                     "the headless workbench needs --screenshot OUT.png");
     ImGuiSession imgui;
     OsMesaHost host(options.width, options.height);
-    ImGui_ImplOpenGL3_Init("#version 330");
-    int code;
-    {
-        Workbench wb(options);
-        if (!options.session.empty()) wb.load_session(options.session);
-        code = run_loop(host, wb, options, false);
-    }
-    ImGui_ImplOpenGL3_Shutdown();
-    return code;
+    return run_on_host(host, options, false);
 }
 
 }  // namespace freqlab::ui

@@ -24,6 +24,19 @@ void check(RTCDevice device, const char* what) {
                     "error " + std::to_string(int(code)) + " " + g_last_embree_message);
 }
 
+RTCRay to_rtc_ray(const Ray& ray, unsigned id) {
+    RTCRay r;
+    r.org_x = ray.origin.x, r.org_y = ray.origin.y, r.org_z = ray.origin.z;
+    r.dir_x = ray.direction.x, r.dir_y = ray.direction.y, r.dir_z = ray.direction.z;
+    r.tnear = ray.tnear;
+    r.tfar = ray.tfar;
+    r.time = 0.0f;
+    r.mask = ~0u;
+    r.id = id;
+    r.flags = 0;
+    return r;
+}
+
 }  // namespace
 
 EmbreeDevice::EmbreeDevice(int threads) {
@@ -209,15 +222,7 @@ void RayScene::intersect8(const Ray* rays, const bool* active, SurfaceHit* hits)
 bool RayScene::occluded(const Ray& ray) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    RTCRay r;
-    r.org_x = ray.origin.x, r.org_y = ray.origin.y, r.org_z = ray.origin.z;
-    r.dir_x = ray.direction.x, r.dir_y = ray.direction.y, r.dir_z = ray.direction.z;
-    r.tnear = ray.tnear;
-    r.tfar = ray.tfar;
-    r.time = 0.0f;
-    r.mask = ~0u;
-    r.id = 0;
-    r.flags = 0;
+    RTCRay r = to_rtc_ray(ray, 0);
     rtcOccluded1(top_, &ctx, &r);
     return r.tfar < 0.0f;
 }
@@ -229,18 +234,7 @@ void RayScene::occluded_stream(const Ray* rays, int count, bool* occluded) const
     rtcInitIntersectContext(&ctx);
     for (int start = 0; start < count; start += kChunk) {
         const int n = std::min(kChunk, count - start);
-        for (int i = 0; i < n; ++i) {
-            const Ray& ray = rays[start + i];
-            RTCRay& r = batch[i];
-            r.org_x = ray.origin.x, r.org_y = ray.origin.y, r.org_z = ray.origin.z;
-            r.dir_x = ray.direction.x, r.dir_y = ray.direction.y, r.dir_z = ray.direction.z;
-            r.tnear = ray.tnear;
-            r.tfar = ray.tfar;
-            r.time = 0.0f;
-            r.mask = ~0u;
-            r.id = unsigned(i);
-            r.flags = 0;
-        }
+        for (int i = 0; i < n; ++i) batch[i] = to_rtc_ray(rays[start + i], unsigned(i));
         rtcOccluded1M(top_, &ctx, batch, unsigned(n), sizeof(RTCRay));
         for (int i = 0; i < n; ++i) occluded[start + i] = batch[i].tfar < 0.0f;
     }
