@@ -23,7 +23,9 @@ int not_yet(const char* what) {
 
 // No display: say so and take the headless route, naming the PNG it writes.
 int headless_fallback(const std::string& scene, int frame) {
-    const std::string stem = std::filesystem::path(scene).stem().string();
+    std::string stem = std::filesystem::path(scene).stem().string();
+    for (char& c : stem)
+        if (c == ':') c = '_';  // builtin:default -> builtin_default
 #ifdef FREQLAB_HAS_UI
     const std::string png = "freqlab-out/workbench_" + stem + ".png";
     std::fprintf(stderr,
