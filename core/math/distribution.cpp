@@ -4,33 +4,6 @@
 
 namespace freqlab {
 
-Distribution1D::Distribution1D(const float* w, int n) : weights_(w, w + n), cdf_(size_t(n) + 1) {
-    double sum = 0.0;
-    cdf_[0] = 0.0;
-    for (int i = 0; i < n; ++i) cdf_[size_t(i) + 1] = sum += double(std::max(w[i], 0.0f));
-    if (sum <= 0.0) {
-        // Nothing to prefer: sample uniformly rather than divide by zero.
-        std::fill(weights_.begin(), weights_.end(), 1.0f);
-        for (int i = 0; i <= n; ++i) cdf_[size_t(i)] = double(i) / n;
-        integral_ = 1.0f;
-        return;
-    }
-    for (double& c : cdf_) c /= sum;
-    cdf_[size_t(n)] = 1.0;
-    integral_ = float(sum / n);
-}
-
-float Distribution1D::sample(float u, float* pdf, int* index) const {
-    // Last bin whose cdf <= u, skipping zero-width bins.
-    const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), double(u));
-    const int i = std::clamp(int(it - cdf_.begin()) - 1, 0, size() - 1);
-    const double width = cdf_[size_t(i) + 1] - cdf_[size_t(i)];
-    const double du = width > 0 ? (double(u) - cdf_[size_t(i)]) / width : 0.0;
-    *pdf = pdf_of_bin(i);
-    *index = i;
-    return std::min(float((i + du) / size()), 0x1.fffffep-1f);
-}
-
 Distribution2D::Distribution2D(const std::vector<float>& weights, int width, int height)
     : width_(width), height_(height) {
     const size_t n = size_t(width) * height;

@@ -1,4 +1,4 @@
-// Impulse responses of a point emitter in an infinite homogeneous medium (seed, Deuxième
+// Impulse responses of point and directional emitters in homogeneous media (seed, Deuxième
 // article §4.2 Eq. 4.1, §4.3): the ZH coefficients, about the axis from the receiver to the
 // emitter, of the radiance arriving at the receiver directly (attenuated) and after exactly one
 // scattering event. Emitter intensity I0 = 1 (W/sr); coefficients are radiance x solid angle.
@@ -15,10 +15,11 @@
 // Without absorption both factors are sigma_r^2 (sigma_r = sigma_s' / sigma_s) at the query
 // distance sigma_r d, which is the seed's rule for point emitters; with absorption the seed's
 // single factor sigma_r = sigma_t / sigma_s is not what the substitution gives: the tests
-// (tests/test_point_impulse.cpp) compare against direct computation at the medium and decide.
+// (tests/test_impulse_response.cpp) compare against direct computation at the medium and decide.
 #pragma once
 
 #include <array>
+#include <functional>
 #include <vector>
 
 #include "volume/medium.h"
@@ -33,24 +34,47 @@ ZhVector point_direct_zh(const HomogeneousMedium& medium, double distance);
 // flat), 48-point Gauss-Legendre along the ray, 40 graded panels x 12 points over the angle.
 ZhVector point_single_zh(const HomogeneousMedium& medium, double distance);
 
-// Canonical single-scattering table (sigma_s = 1, sigma_a = 0) over optical distances
-// D in [kMinD, kMaxD], 256 log-spaced bins, for one g; queried for any medium by the remap.
-class PointImpulseTable {
+// Directional emitter (Eq. 4.2) with irradiance E0 = 1 above a medium whose boundary plane,
+// perpendicular to the light, lies `depth` above the receiver (towards the light); the ZH axis
+// points at the light. The ray integral has a closed form per direction:
+//   single(mu) = sigma_s p(mu) e^{-sigma_t s} (1 - e^{-sigma_t t_max (1 - mu)}) / (sigma_t (1 -
+//   mu)), t_max = s / mu above the horizon of the boundary (mu > 0), infinite below it.
+// Remap (tested): single(s) = sigma_s / sigma_t * single_1(sigma_t s); direct(s) = e^{-sigma_t s}.
+ZhVector directional_direct_zh(const HomogeneousMedium& medium, double depth);
+ZhVector directional_single_zh(const HomogeneousMedium& medium, double depth);
+
+// ZH vectors of a canonical medium (sigma_s = sigma_t = 1) over optical distances
+// D in [kMinD, kMaxD], 256 log-spaced bins, Catmull-Rom interpolated in log D after removing the
+// e^{-D} (and, for point emitters, 1/D) trends.
+class ZhDistanceTable {
   public:
     static constexpr double kMinD = 1e-3, kMaxD = 40.0;
     static constexpr int kBins = 256;
+    enum class Trend { PointLike, DirectionalLike };  // divide out e^-D / D, or e^-D only
 
-    explicit PointImpulseTable(double g);
-    double g() const { return g_; }
-    // Single-scattered ZH at `distance` in `medium` (its g is ignored: the table's is used).
-    ZhVector single(const HomogeneousMedium& medium, double distance) const;
-    ZhVector canonical_single(double optical_distance) const;  // sigma_s = sigma_t = 1
+    ZhDistanceTable(Trend trend, const std::function<ZhVector(double)>& canonical);
+    ZhVector at(double optical_distance) const;
 
   private:
-    double g_;
-    // Stored as single_l(D) * D * e^D: removes the 1/D and e^{-D} trends so that linear
-    // interpolation in log D is accurate.
+    double trend(double D) const;
+    Trend trend_;
     std::vector<ZhVector> scaled_;
+};
+
+// Single scattering of one emitter type for one HG g, queried for any medium by the remap.
+class SingleScatterTable {
+  public:
+    enum class Emitter { Point, Directional };
+    SingleScatterTable(Emitter emitter, double g);
+    // Single-scattered ZH at `distance` (point: to the emitter; directional: to the medium's
+    // boundary) in `medium` (its g is ignored: the table's is used).
+    ZhVector single(const HomogeneousMedium& medium, double distance) const;
+    double g() const { return g_; }
+
+  private:
+    Emitter emitter_;
+    double g_;
+    ZhDistanceTable table_;
 };
 
 }  // namespace freqlab
