@@ -91,21 +91,22 @@ TEST(PointImpulse, DirectTermIsTheAttenuatedDelta) {
 }
 
 TEST(PointImpulse, SigmaRemapMatchesDirectComputation) {
-    const SingleScatterTable table(SingleScatterTable::Emitter::Point, 0.0);
+    const SingleScatterTable table(SingleScatterTable::Emitter::Point);
     for (double sigma_s : {0.1, 0.3, 3.0, 10.0})
         for (double sigma_a : {0.0, 0.1, 1.0})
-            for (double d : {0.05, 0.4, 1.3}) {
-                const HomogeneousMedium m{sigma_s, sigma_a, 0.0};
-                if (m.sigma_t() * d >= ZhDistanceTable::kMaxD) continue;
-                const ZhVector q = table.single(m, d), direct = point_single_zh(m, d);
-                for (int l = 0; l < kImpulseOrder; ++l) {
-                    if (std::fabs(direct[size_t(l)]) < 1e-3 * std::fabs(direct[0])) continue;
-                    EXPECT_NEAR(q[size_t(l)], direct[size_t(l)],
-                                0.005 * std::fabs(direct[size_t(l)]))
-                        << "sigma_s " << sigma_s << " sigma_a " << sigma_a << " d " << d << " l "
-                        << l;
+            for (double g : {-0.3, 0.2, 0.5})
+                for (double d : {0.05, 0.4, 1.3}) {
+                    const HomogeneousMedium m{sigma_s, sigma_a, g};
+                    if (m.sigma_t() * d >= ZhDistanceTable::kMaxD) continue;
+                    const ZhVector q = table.single(m, d), direct = point_single_zh(m, d);
+                    for (int l = 0; l < kImpulseOrder; ++l) {
+                        if (std::fabs(direct[size_t(l)]) < 1e-3 * std::fabs(direct[0])) continue;
+                        EXPECT_NEAR(q[size_t(l)], direct[size_t(l)],
+                                    0.005 * std::fabs(direct[size_t(l)]))
+                            << "sigma_s " << sigma_s << " sigma_a " << sigma_a << " d " << d
+                            << " l " << l;
+                    }
                 }
-            }
 }
 
 namespace {
@@ -156,19 +157,20 @@ TEST(DirectionalImpulse, SingleScatteringMatchesBruteForce) {
 }
 
 TEST(DirectionalImpulse, SigmaRemapMatchesDirectComputation) {
-    const SingleScatterTable table(SingleScatterTable::Emitter::Directional, 0.5);
+    const SingleScatterTable table(SingleScatterTable::Emitter::Directional);
     for (double sigma_s : {0.1, 0.3, 3.0, 10.0})
         for (double sigma_a : {0.0, 0.1, 1.0})
-            for (double s : {0.05, 0.4, 1.3}) {
-                const HomogeneousMedium m{sigma_s, sigma_a, 0.5};
-                if (m.sigma_t() * s >= ZhDistanceTable::kMaxD) continue;
-                const ZhVector q = table.single(m, s), direct = directional_single_zh(m, s);
-                for (int l = 0; l < kImpulseOrder; ++l) {
-                    if (std::fabs(direct[size_t(l)]) < 1e-3 * std::fabs(direct[0])) continue;
-                    EXPECT_NEAR(q[size_t(l)], direct[size_t(l)],
-                                0.005 * std::fabs(direct[size_t(l)]))
-                        << "sigma_s " << sigma_s << " sigma_a " << sigma_a << " s " << s << " l "
-                        << l;
+            for (double g : {-0.3, 0.2, 0.5})
+                for (double s : {0.05, 0.4, 1.3}) {
+                    const HomogeneousMedium m{sigma_s, sigma_a, g};
+                    if (m.sigma_t() * s >= ZhDistanceTable::kMaxD) continue;
+                    const ZhVector q = table.single(m, s), direct = directional_single_zh(m, s);
+                    for (int l = 0; l < kImpulseOrder; ++l) {
+                        if (std::fabs(direct[size_t(l)]) < 1e-3 * std::fabs(direct[0])) continue;
+                        EXPECT_NEAR(q[size_t(l)], direct[size_t(l)],
+                                    0.005 * std::fabs(direct[size_t(l)]))
+                            << "sigma_s " << sigma_s << " sigma_a " << sigma_a << " s " << s
+                            << " l " << l;
+                    }
                 }
-            }
 }

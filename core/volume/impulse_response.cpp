@@ -1,5 +1,6 @@
 #include "volume/impulse_response.h"
 
+#include <tbb/parallel_for.h>
 #include <boost/math/quadrature/gauss.hpp>
 
 #include <cmath>
@@ -18,27 +19,123 @@ double zh_basis(int l, double cos_theta, double* p /* scratch, >= l+1 */) {
     return std::sqrt((2.0 * l + 1.0) / (4.0 * kPiD)) * p[l];
 }
 
-// Single-scattered radiance arriving from direction theta (from the axis to the emitter),
-// multiplied by sin(theta) so that it stays finite where the ray passes through the emitter.
-double single_radiance_times_sin(const HomogeneousMedium& m, double d, double theta) {
+// Phase functions as a small set of terms whose responses are accumulated together: HG
+// alone (one term) or the Legendre basis b_k(c) = (2k+1)/(4 pi) P_k(c) (kPhaseTerms terms).
+struct HgPhase {
+    double g;
+    static constexpr int count = 1;
+    void eval(double c, double* out) const { out[0] = hg_phase(g, c); }
+};
+struct LegendrePhaseBasis {
+    static constexpr int count = kPhaseTerms;
+    void eval(double c, double* out) const {
+        double p0 = 1.0, p1 = c;
+        out[0] = 1.0 / (4.0 * kPiD);
+        if (count > 1) out[1] = 3.0 * c / (4.0 * kPiD);
+        for (int k = 2; k < count; ++k) {
+            const double p2 = ((2.0 * k - 1.0) * c * p1 - (k - 1.0) * p0) / k;
+            p0 = p1;
+            p1 = p2;
+            out[k] = (2.0 * k + 1.0) / (4.0 * kPiD) * p2;
+        }
+    }
+};
+
+// Point emitter: single-scattered radiance from direction theta (from the axis to the
+// emitter), per phase term, times sin(theta) so that it stays finite where the ray passes
+// through the emitter. Equi-angular substitution t = t0 + h tan(phi): dt / r^2 = dphi / h.
+template <class Phase>
+void point_radiance_times_sin(double sigma_s, double sigma_t, double d, double theta,
+                              const Phase& phase, double* out) {
     using boost::math::quadrature::gauss;
+    for (int j = 0; j < Phase::count; ++j) out[j] = 0.0;
     const double ct = std::cos(theta), st = std::sin(theta);
     const double t0 = d * ct, h = d * st;  // closest approach along the ray, and its distance
-    if (h < 1e-300) return 0.0;
-    // Equi-angular: t = t0 + h tan(phi), r = h / cos(phi), dt / r^2 = dphi / h.
+    if (h < 1e-300) return;
     const double phi_a = std::atan2(-t0, h);
-    const double st_over_h = 1.0 / d;  // sin(theta) / h
-    const double sigma_t = m.sigma_t();
-    const double inner = gauss<double, 48>::integrate(
-        [&](double phi) {
+    const auto& x = gauss<double, 48>::abscissa();
+    const auto& w = gauss<double, 48>::weights();
+    const double mid = 0.5 * (phi_a + 0.5 * kPiD), half = 0.5 * (0.5 * kPiD - phi_a);
+    double terms[Phase::count];
+    for (size_t k = 0; k < x.size(); ++k)
+        for (double sign : {-1.0, 1.0}) {
+            const double phi = mid + sign * half * x[k];
             const double t = t0 + h * std::tan(phi), r = h / std::cos(phi);
             // Light travels from the emitter (at d z) to x_t = t w, then towards the receiver
             // (-w): cos = u . (-w) with u = (t w - d z) / r, so u . w = (t - d cos theta) / r.
             const double cos_scatter = -(t - t0) / r;
-            return std::exp(-sigma_t * (t + r)) * m.sigma_s * hg_phase(m.g, cos_scatter);
-        },
-        phi_a, 0.5 * kPiD);
-    return inner * st_over_h;
+            const double common = std::exp(-sigma_t * (t + r)) * sigma_s * w[k] * half / d;
+            phase.eval(cos_scatter, terms);
+            for (int j = 0; j < Phase::count; ++j) out[j] += common * terms[j];
+        }
+}
+
+template <class Phase>
+void point_single(double sigma_s, double sigma_t, double d, const Phase& phase, ZhVector* out) {
+    using boost::math::quadrature::gauss;
+    for (int j = 0; j < Phase::count; ++j) out[j] = ZhVector{};
+    // Panels graded towards theta = 0, where the response to a forward-peaked phase function
+    // and to short distances concentrates.
+    const int panels = 40;
+    double p[kImpulseOrder], radiance[Phase::count], basis[kImpulseOrder];
+    const auto& x = gauss<double, 12>::abscissa();
+    const auto& w = gauss<double, 12>::weights();
+    for (int i = 0; i < panels; ++i) {
+        const double a = kPiD * std::pow(double(i) / panels, 2.0);
+        const double b = kPiD * std::pow(double(i + 1) / panels, 2.0);
+        for (size_t k = 0; k < x.size(); ++k)
+            for (double sign : {-1.0, 1.0}) {
+                const double theta = 0.5 * (a + b) + sign * 0.5 * (b - a) * x[k];
+                point_radiance_times_sin(sigma_s, sigma_t, d, theta, phase, radiance);
+                for (int l = 0; l < kImpulseOrder; ++l) basis[l] = zh_basis(l, std::cos(theta), p);
+                const double weight = 2.0 * kPiD * w[k] * 0.5 * (b - a);
+                for (int j = 0; j < Phase::count; ++j)
+                    for (int l = 0; l < kImpulseOrder; ++l)
+                        out[j][size_t(l)] += weight * radiance[j] * basis[l];
+            }
+    }
+}
+
+// Directional emitter: the ray integral in closed form (see the header), per phase term.
+template <class Phase>
+void directional_single(double sigma_s, double sigma_t, double s, const Phase& phase,
+                        ZhVector* out) {
+    using boost::math::quadrature::gauss;
+    for (int j = 0; j < Phase::count; ++j) out[j] = ZhVector{};
+    double p[kImpulseOrder], terms[Phase::count];
+    const auto& x = gauss<double, 12>::abscissa();
+    const auto& w = gauss<double, 12>::weights();
+    // Panels split at mu = 0 (where t_max becomes infinite) and graded towards mu = 1.
+    const int panels = 24;
+    for (int half = 0; half < 2; ++half)
+        for (int i = 0; i < panels; ++i) {
+            double a, b;
+            if (half == 0)
+                a = -1.0 + double(i) / panels, b = -1.0 + double(i + 1) / panels;
+            else
+                a = 1.0 - std::pow(1.0 - double(i) / panels, 2.0),
+                b = 1.0 - std::pow(1.0 - double(i + 1) / panels, 2.0);
+            for (size_t k = 0; k < x.size(); ++k)
+                for (double sign : {-1.0, 1.0}) {
+                    const double mu = 0.5 * (a + b) + sign * 0.5 * (b - a) * x[k];
+                    const double kk = sigma_t * (1.0 - mu);
+                    double path;  // int_0^t_max e^{-sigma_t t (1 - mu)} dt
+                    if (mu > 0) {
+                        const double t_max = s / mu;
+                        path = kk * t_max < 1e-8 ? t_max : -std::expm1(-kk * t_max) / kk;
+                    } else {
+                        path = 1.0 / kk;
+                    }
+                    const double common =
+                        2.0 * kPiD * sigma_s * std::exp(-sigma_t * s) * path * w[k] * 0.5 * (b - a);
+                    phase.eval(mu, terms);
+                    for (int l = 0; l < kImpulseOrder; ++l) {
+                        const double y = zh_basis(l, mu, p);
+                        for (int j = 0; j < Phase::count; ++j)
+                            out[j][size_t(l)] += common * terms[j] * y;
+                    }
+                }
+        }
 }
 
 }  // namespace
@@ -52,28 +149,15 @@ ZhVector point_direct_zh(const HomogeneousMedium& m, double d) {
 }
 
 ZhVector point_single_zh(const HomogeneousMedium& m, double d) {
-    using boost::math::quadrature::gauss;
-    ZhVector z{};
-    // Panels graded towards theta = 0, where the response to a forward-peaked phase function
-    // and to short distances concentrates.
-    const int panels = 40;
-    for (int i = 0; i < panels; ++i) {
-        const double a = kPiD * std::pow(double(i) / panels, 2.0);
-        const double b = kPiD * std::pow(double(i + 1) / panels, 2.0);
-        double p[kImpulseOrder];
-        const auto& x = gauss<double, 12>::abscissa();
-        const auto& w = gauss<double, 12>::weights();
-        for (size_t k = 0; k < x.size(); ++k)
-            for (double sign : {-1.0, 1.0}) {
-                if (x[k] == 0.0 && sign < 0) continue;
-                const double theta = 0.5 * (a + b) + sign * 0.5 * (b - a) * x[k];
-                const double f =
-                    single_radiance_times_sin(m, d, theta) * 2.0 * kPiD * w[k] * 0.5 * (b - a);
-                for (int l = 0; l < kImpulseOrder; ++l)
-                    z[size_t(l)] += f * zh_basis(l, std::cos(theta), p);
-            }
-    }
+    ZhVector z;
+    point_single(m.sigma_s, m.sigma_t(), d, HgPhase{m.g}, &z);
     return z;
+}
+
+PhaseResponses point_single_basis(double optical_distance) {
+    PhaseResponses r;
+    point_single(1.0, 1.0, optical_distance, LegendrePhaseBasis{}, r.data());
+    return r;
 }
 
 ZhVector directional_direct_zh(const HomogeneousMedium& m, double depth) {
@@ -85,50 +169,27 @@ ZhVector directional_direct_zh(const HomogeneousMedium& m, double depth) {
 }
 
 ZhVector directional_single_zh(const HomogeneousMedium& m, double s) {
-    using boost::math::quadrature::gauss;
-    const double sigma_t = m.sigma_t();
-    auto radiance = [&](double mu) {
-        const double k = sigma_t * (1.0 - mu);
-        double path;  // int_0^t_max e^{-sigma_t t (1 - mu)} dt
-        if (mu > 0) {
-            const double t_max = s / mu;
-            path = k * t_max < 1e-8 ? t_max : -std::expm1(-k * t_max) / k;
-        } else {
-            path = 1.0 / k;
-        }
-        return m.sigma_s * hg_phase(m.g, mu) * std::exp(-sigma_t * s) * path;
-    };
-    ZhVector z{};
-    double p[kImpulseOrder];
-    // Panels split at mu = 0 (where t_max becomes infinite) and graded towards mu = 1.
-    const int panels = 24;
-    for (int half = 0; half < 2; ++half)
-        for (int i = 0; i < panels; ++i) {
-            double a, b;
-            if (half == 0)
-                a = -1.0 + double(i) / panels, b = -1.0 + double(i + 1) / panels;
-            else
-                a = 1.0 - std::pow(1.0 - double(i) / panels, 2.0),
-                b = 1.0 - std::pow(1.0 - double(i + 1) / panels, 2.0);
-            const auto& x = gauss<double, 12>::abscissa();
-            const auto& w = gauss<double, 12>::weights();
-            for (size_t k = 0; k < x.size(); ++k)
-                for (double sign : {-1.0, 1.0}) {
-                    const double mu = 0.5 * (a + b) + sign * 0.5 * (b - a) * x[k];
-                    const double f = 2.0 * kPiD * radiance(mu) * w[k] * 0.5 * (b - a);
-                    for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += f * zh_basis(l, mu, p);
-                }
-        }
+    ZhVector z;
+    directional_single(m.sigma_s, m.sigma_t(), s, HgPhase{m.g}, &z);
     return z;
 }
 
-ZhDistanceTable::ZhDistanceTable(Trend trend, const std::function<ZhVector(double)>& canonical)
+PhaseResponses directional_single_basis(double optical_distance) {
+    PhaseResponses r;
+    directional_single(1.0, 1.0, optical_distance, LegendrePhaseBasis{}, r.data());
+    return r;
+}
+
+double ZhDistanceTable::distance_of_bin(int i) {
+    return kMinD * std::pow(kMaxD / kMinD, double(i) / (kBins - 1));
+}
+
+ZhDistanceTable::ZhDistanceTable(Trend trend, const std::vector<ZhVector>& canonical)
     : trend_(trend), scaled_(kBins) {
     for (int i = 0; i < kBins; ++i) {
-        const double D = kMinD * std::pow(kMaxD / kMinD, double(i) / (kBins - 1));
-        const ZhVector z = canonical(D);
+        const double D = distance_of_bin(i);
         for (int l = 0; l < kImpulseOrder; ++l)
-            scaled_[size_t(i)][size_t(l)] = z[size_t(l)] / this->trend(D);
+            scaled_[size_t(i)][size_t(l)] = canonical[size_t(i)][size_t(l)] / this->trend(D);
     }
 }
 
@@ -157,20 +218,36 @@ ZhVector ZhDistanceTable::at(double D) const {
     return z;
 }
 
-SingleScatterTable::SingleScatterTable(Emitter emitter, double g)
-    : emitter_(emitter),
-      g_(g),
-      table_(emitter == Emitter::Point ? ZhDistanceTable::Trend::PointLike
-                                       : ZhDistanceTable::Trend::DirectionalLike,
-             [emitter, g](double D) {
-                 const HomogeneousMedium canonical{1.0, 0.0, g};
-                 return emitter == Emitter::Point ? point_single_zh(canonical, D)
-                                                  : directional_single_zh(canonical, D);
-             }) {}
+SingleScatterTable::SingleScatterTable(Emitter emitter) : emitter_(emitter) {
+    const ZhDistanceTable::Trend trend = emitter == Emitter::Point
+                                             ? ZhDistanceTable::Trend::PointLike
+                                             : ZhDistanceTable::Trend::DirectionalLike;
+    // One quadrature pass per distance gives every phase term's response.
+    std::vector<PhaseResponses> responses(ZhDistanceTable::kBins);
+    tbb::parallel_for(0, ZhDistanceTable::kBins, [&](int i) {
+        const double D = ZhDistanceTable::distance_of_bin(i);
+        responses[size_t(i)] =
+            emitter == Emitter::Point ? point_single_basis(D) : directional_single_basis(D);
+    });
+    terms_.reserve(kPhaseTerms);
+    for (int j = 0; j < kPhaseTerms; ++j) {
+        std::vector<ZhVector> column(ZhDistanceTable::kBins);
+        for (int i = 0; i < ZhDistanceTable::kBins; ++i)
+            column[size_t(i)] = responses[size_t(i)][size_t(j)];
+        terms_.emplace_back(trend, column);
+    }
+}
 
 ZhVector SingleScatterTable::single(const HomogeneousMedium& m, double distance) const {
+    // HG = sum_k g^k b_k: the response is the same sum of the basis responses.
+    ZhVector z{};
+    double gk = 1.0;
+    const double D = m.sigma_t() * distance;
+    for (int j = 0; j < kPhaseTerms; ++j, gk *= m.g) {
+        const ZhVector t = terms_[size_t(j)].at(D);
+        for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += gk * t[size_t(l)];
+    }
     // Optical-distance substitution (see the header): the factors were derived, then tested.
-    ZhVector z = table_.at(m.sigma_t() * distance);
     const double factor =
         emitter_ == Emitter::Point ? m.sigma_s * m.sigma_t() : m.sigma_s / m.sigma_t();
     for (double& v : z) v *= factor;
