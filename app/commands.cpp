@@ -2,6 +2,7 @@
 
 #include <tbb/global_control.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -17,6 +18,7 @@
 #include "render/frame_renderer.h"
 #include "render/shading_pass.h"
 #include "scene/scene_loader.h"
+#include "volume/impulse_response.h"
 
 namespace freqlab {
 
@@ -209,6 +211,46 @@ int run_figure(const FigureArgs& args) {
     }
     write_figure(args.out, file.layers, spec);
     std::fprintf(stderr, "wrote %s\n", args.out.c_str());
+    return 0;
+}
+
+int run_tables_query(const TablesQueryArgs& a) {
+    if (a.emitter == "area")
+        throw Error("--emitter", "area",
+                    "the differential-area tables are not built yet; point and directional are");
+    if (a.emitter != "point" && a.emitter != "directional")
+        throw Error("--emitter", a.emitter, "expected point, directional or area");
+    if (!(a.distance > 0))
+        throw Error("--distance", std::to_string(a.distance), "expected a distance > 0");
+    if (!(a.sigma_s > 0) || a.sigma_a < 0)
+        throw Error("--sigma-s/--sigma-a", "", "expected sigma_s > 0 and sigma_a >= 0");
+    if (std::fabs(a.g) > 0.6)
+        throw Error("--g", std::to_string(a.g), "expected |g| <= 0.6 (the tables' range)");
+    if (a.bounces != "1")
+        throw Error("--bounces", a.bounces,
+                    "only single scattering (1) is tabulated yet; multiple scattering comes next");
+    const HomogeneousMedium m{a.sigma_s, a.sigma_a, a.g};
+    const bool point = a.emitter == "point";
+    const SingleScatterTable table(point ? SingleScatterTable::Emitter::Point
+                                         : SingleScatterTable::Emitter::Directional);
+    const ZhVector direct =
+        point ? point_direct_zh(m, a.distance) : directional_direct_zh(m, a.distance);
+    const ZhVector single = table.single(m, a.distance);
+    ZhVector total;
+    for (int l = 0; l < kImpulseOrder; ++l)
+        total[size_t(l)] = direct[size_t(l)] + single[size_t(l)];
+    const json out = {
+        {"emitter", a.emitter},
+        {"distance", a.distance},
+        {"medium", {{"sigma_s", a.sigma_s}, {"sigma_a", a.sigma_a}, {"g", a.g}}},
+        {"normalization", point ? "emitter intensity I0 = 1 W/sr; ZH about the axis to the emitter"
+                                : "irradiance E0 = 1 W/m^2 at the medium boundary; ZH about the "
+                                  "direction to the light"},
+        {"order", kImpulseOrder},
+        {"direct", direct},
+        {"single", single},
+        {"total", total}};
+    std::cout << out.dump(2) << std::endl;
     return 0;
 }
 

@@ -40,6 +40,14 @@ struct FigureArgs {
 };
 int run_figure(const FigureArgs& args);
 
+struct TablesQueryArgs {
+    std::string emitter = "point";  // point | directional | area
+    double distance = 1.0;          // point: to the emitter; directional: to the medium boundary
+    double sigma_s = 1.0, sigma_a = 0.0, g = 0.0;
+    std::string bounces = "1";  // all | N
+};
+int run_tables_query(const TablesQueryArgs& args);
+
 // Frames "A:B" → [A, B); "N" → [N, N+1). Throws Error naming --frames.
 std::pair<int, int> parse_frame_range(const std::string& text, int frame_count);
 // "WxH" → (W, H).

@@ -114,9 +114,16 @@ int main(int argc, char** argv) {
     figure->add_option("--title", fa.title, "title text");
     figure->add_option("--out", fa.out, "output PNG")->required();
 
-    auto* tables =
-        app.add_subcommand("tables", "tabulate / query the impulse-response tables (to come)");
-    tables->allow_extras();
+    freqlab::TablesQueryArgs tq;
+    bool tables_query = false;
+    auto* tables = app.add_subcommand("tables", "query the impulse-response tables (method B)");
+    tables->add_flag("--query", tables_query, "print the ZH coefficients for one configuration");
+    tables->add_option("--emitter", tq.emitter, "point|directional|area");
+    tables->add_option("--distance", tq.distance, "to the point emitter / to the medium boundary");
+    tables->add_option("--sigma-s", tq.sigma_s, "scattering coefficient");
+    tables->add_option("--sigma-a", tq.sigma_a, "absorption coefficient");
+    tables->add_option("--g", tq.g, "Henyey-Greenstein anisotropy, |g| <= 0.6");
+    tables->add_option("--bounces", tq.bounces, "1 (all / N arrive with multiple scattering)");
     auto* bake = app.add_subcommand("bake", "lightmap / probe baking with media (to come)");
     bake->allow_extras();
     auto* bench = app.add_subcommand("bench", "time-vs-error study (to come)");
@@ -127,7 +134,10 @@ int main(int argc, char** argv) {
         if (*render) return freqlab::run_render(r);
         if (*compare) return freqlab::run_compare(c);
         if (*figure) return freqlab::run_figure(fa);
-        if (*tables) return not_yet("tables");
+        if (*tables) {
+            if (!tables_query) return not_yet("tables (generation to a versioned file)");
+            return freqlab::run_tables_query(tq);
+        }
         if (*bake) return not_yet("bake");
         if (*bench) return not_yet("bench");
             // `freqlab` alone, or `freqlab gui ...`
