@@ -1,0 +1,132 @@
+#include "volume/multiple_scatter.h"
+
+#include <tbb/parallel_for.h>
+#include <boost/math/quadrature/gauss.hpp>
+
+#include <cmath>
+
+namespace freqlab {
+
+namespace {
+
+constexpr double kPiD = 3.14159265358979323846;
+
+double grid_u(double D) {
+    return std::log(D / ZhDistanceTable::kMinD) /
+           std::log(ZhDistanceTable::kMaxD / ZhDistanceTable::kMinD) * (ZhDistanceTable::kBins - 1);
+}
+
+// Catmull-Rom on a uniform grid at fractional index u (clamped inside the grid).
+double catmull_rom(const std::vector<double>& v, double u) {
+    const int n = int(v.size());
+    u = std::clamp(u, 0.0, double(n - 1));
+    const int i = std::min(int(u), n - 2);
+    const double f = u - i, f2 = f * f, f3 = f2 * f;
+    const int i0 = std::max(i - 1, 0), i3 = std::min(i + 2, n - 1);
+    return (-0.5 * f3 + f2 - 0.5 * f) * v[size_t(i0)] + (1.5 * f3 - 2.5 * f2 + 1.0) * v[size_t(i)] +
+           (-1.5 * f3 + 2.0 * f2 + 0.5 * f) * v[size_t(i) + 1] +
+           (0.5 * f3 - 0.5 * f2) * v[size_t(i3)];
+}
+
+double zh_y(int l, double x) {
+    double p0 = 1.0, p1 = x;
+    double p = l == 0 ? 1.0 : x;
+    for (int k = 2; k <= l; ++k) {
+        p = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
+        p0 = p1;
+        p1 = p;
+    }
+    return std::sqrt((2.0 * l + 1.0) / (4.0 * kPiD)) * p;
+}
+
+}  // namespace
+
+double PointMultipleScatter::fluence(int k, double D) const {
+    if (!(D > 0) || D >= ZhDistanceTable::kMaxD) return 0.0;
+    const double scaled =
+        catmull_rom(fluence_scaled_[size_t(k)], grid_u(std::max(D, ZhDistanceTable::kMinD)));
+    return scaled * std::exp(-D) / (D * D);
+}
+
+PointMultipleScatter::PointMultipleScatter(int bounces)
+    : fluence_scaled_(size_t(bounces) + 1, std::vector<double>(ZhDistanceTable::kBins)),
+      zh_(size_t(bounces) + 1, std::vector<ZhVector>(ZhDistanceTable::kBins)) {
+    using boost::math::quadrature::gauss;
+    for (int i = 0; i < ZhDistanceTable::kBins; ++i)
+        fluence_scaled_[0][size_t(i)] = 1.0;  // e^-D / D^2
+    const auto& xs = gauss<double, 12>::abscissa();
+    const auto& ws = gauss<double, 12>::weights();
+    const auto& xr = gauss<double, 32>::abscissa();
+    const auto& wr = gauss<double, 32>::weights();
+    for (int k = 0; k < bounces; ++k) {
+        tbb::parallel_for(0, ZhDistanceTable::kBins, [&](int bin) {
+            const double D = ZhDistanceTable::distance_of_bin(bin);
+            ZhVector z{};
+            // Over theta (from the direction towards the emitter), panels graded towards 0:
+            // the radiance behaves like 1 / sin(theta) there, which the sin(theta) of the
+            // solid angle cancels (in mu it would be an endpoint singularity).
+            const int panels = 40;
+            for (int p = 0; p < panels; ++p) {
+                const double a = kPiD * std::pow(double(p) / panels, 2.0);
+                const double b = kPiD * std::pow(double(p + 1) / panels, 2.0);
+                for (size_t q = 0; q < xs.size(); ++q)
+                    for (double sign : {-1.0, 1.0}) {
+                        const double theta = 0.5 * (a + b) + sign * 0.5 * (b - a) * xs[q];
+                        const double mu = std::cos(theta);
+                        const double t0 = D * mu, h = D * std::sin(theta);
+                        // Along the ray: t = t0 + h tan(phi), dt = h / cos^2(phi) dphi.
+                        const double phi_a = std::atan2(-t0, std::max(h, 1e-300));
+                        const double mid = 0.5 * (phi_a + 0.5 * kPiD),
+                                     half = 0.5 * (0.5 * kPiD - phi_a);
+                        double radiance = 0.0;
+                        for (size_t e = 0; e < xr.size(); ++e)
+                            for (double s2 : {-1.0, 1.0}) {
+                                const double phi = mid + s2 * half * xr[e];
+                                const double c = std::cos(phi);
+                                const double t = t0 + h * std::tan(phi), r = h / c;
+                                radiance += wr[e] * half * h / (c * c) * std::exp(-t) *
+                                            fluence(k, r) / (4.0 * kPiD);
+                            }
+                        const double weight = 2.0 * kPiD * std::sin(theta) * ws[q] * 0.5 * (b - a);
+                        for (int l = 0; l < kImpulseOrder; ++l)
+                            z[size_t(l)] += weight * radiance * zh_y(l, mu);
+                    }
+            }
+            zh_[size_t(k) + 1][size_t(bin)] = z;
+            // Fluence = integral of the radiance over the sphere = sqrt(4 pi) x the DC.
+            fluence_scaled_[size_t(k) + 1][size_t(bin)] =
+                std::sqrt(4.0 * kPiD) * z[0] * D * D * std::exp(D);
+        });
+    }
+}
+
+ZhVector PointMultipleScatter::canonical(int k, double D) const {
+    ZhVector z{};
+    if (!(D > 0) || D >= ZhDistanceTable::kMaxD || k < 1 || k > bounces()) return z;
+    const double u = grid_u(std::max(D, ZhDistanceTable::kMinD));
+    const double trend = std::exp(-D) / (D * D), grid_trend_inv = 1.0;
+    std::vector<double> column(ZhDistanceTable::kBins);
+    for (int l = 0; l < kImpulseOrder; ++l) {
+        for (int i = 0; i < ZhDistanceTable::kBins; ++i) {
+            const double Di = ZhDistanceTable::distance_of_bin(i);
+            column[size_t(i)] = zh_[size_t(k)][size_t(i)][size_t(l)] * Di * Di * std::exp(Di);
+        }
+        z[size_t(l)] = catmull_rom(column, u) * trend * grid_trend_inv;
+    }
+    return z;
+}
+
+ZhVector PointMultipleScatter::bounces_in(const HomogeneousMedium& m, double distance, int first,
+                                          int last) const {
+    ZhVector z{};
+    const double c = m.sigma_s / m.sigma_t(), D = m.sigma_t() * distance;
+    double ck = std::pow(c, first);
+    for (int k = first; k <= last; ++k, ck *= c) {
+        const ZhVector b = canonical(k, D);
+        for (int l = 0; l < kImpulseOrder; ++l)
+            z[size_t(l)] += m.sigma_t() * m.sigma_t() * ck * b[size_t(l)];
+    }
+    return z;
+}
+
+}  // namespace freqlab
