@@ -18,7 +18,7 @@
 #include "render/frame_renderer.h"
 #include "render/shading_pass.h"
 #include "scene/scene_loader.h"
-#include "volume/impulse_response.h"
+#include "volume/impulse_tables.h"
 
 namespace freqlab {
 
@@ -226,31 +226,83 @@ int run_tables_query(const TablesQueryArgs& a) {
         throw Error("--sigma-s/--sigma-a", "", "expected sigma_s > 0 and sigma_a >= 0");
     if (std::fabs(a.g) > 0.6)
         throw Error("--g", std::to_string(a.g), "expected |g| <= 0.6 (the tables' range)");
-    if (a.bounces != "1")
-        throw Error("--bounces", a.bounces,
-                    "only single scattering (1) is tabulated yet; multiple scattering comes next");
-    const HomogeneousMedium m{a.sigma_s, a.sigma_a, a.g};
     const bool point = a.emitter == "point";
-    const SingleScatterTable table(point ? SingleScatterTable::Emitter::Point
-                                         : SingleScatterTable::Emitter::Directional);
+    int last_bounce = 1;
+    if (a.bounces == "all")
+        last_bounce = kDefaultTableBounces;
+    else {
+        char* end = nullptr;
+        last_bounce = int(std::strtol(a.bounces.c_str(), &end, 10));
+        if (!end || *end || last_bounce < 1 || last_bounce > kDefaultTableBounces)
+            throw Error("--bounces", a.bounces,
+                        "expected all or 1 to " + std::to_string(kDefaultTableBounces));
+    }
+    if (!point && last_bounce > 1)
+        throw Error("--bounces", a.bounces,
+                    "multiple scattering is tabulated for point emitters only so far");
+    std::string path;
+    const ImpulseTables tables = ImpulseTables::cached(kDefaultTableBounces, &path);
+    const HomogeneousMedium m{a.sigma_s, a.sigma_a, a.g};
     const ZhVector direct =
         point ? point_direct_zh(m, a.distance) : directional_direct_zh(m, a.distance);
-    const ZhVector single = table.single(m, a.distance);
+    const ZhVector single =
+        (point ? tables.point_single() : tables.directional_single()).single(m, a.distance);
+    // Multiple scattering is isotropic; anisotropy enters by similarity: sigma_s (1 - g).
+    HomogeneousMedium similar = m;
+    similar.sigma_s = m.sigma_s * (1.0 - m.g);
+    similar.g = 0.0;
+    const ZhVector multiple =
+        last_bounce > 1 ? tables.point_multiple().bounces_in(similar, a.distance, 2, last_bounce)
+                        : ZhVector{};
     ZhVector total;
     for (int l = 0; l < kImpulseOrder; ++l)
-        total[size_t(l)] = direct[size_t(l)] + single[size_t(l)];
+        total[size_t(l)] = direct[size_t(l)] + single[size_t(l)] + multiple[size_t(l)];
     const json out = {
         {"emitter", a.emitter},
         {"distance", a.distance},
         {"medium", {{"sigma_s", a.sigma_s}, {"sigma_a", a.sigma_a}, {"g", a.g}}},
+        {"bounces", a.bounces},
         {"normalization", point ? "emitter intensity I0 = 1 W/sr; ZH about the axis to the emitter"
                                 : "irradiance E0 = 1 W/m^2 at the medium boundary; ZH about the "
                                   "direction to the light"},
         {"order", kImpulseOrder},
+        {"tables", path},
         {"direct", direct},
         {"single", single},
+        {"multiple", multiple},
         {"total", total}};
     std::cout << out.dump(2) << std::endl;
+    return 0;
+}
+
+int run_tables_generate(const std::string& out_arg, int bounces) {
+    using Clock = std::chrono::steady_clock;
+    const std::string out =
+        out_arg.empty() ? ImpulseTables::default_path(bounces).string() : out_arg;
+    auto t0 = Clock::now();
+    const ImpulseTables built = ImpulseTables::build(bounces);
+    const double build_s = std::chrono::duration<double>(Clock::now() - t0).count();
+    built.save(out);
+    t0 = Clock::now();
+    const ImpulseTables loaded = ImpulseTables::load(out);
+    const double load_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    // Verify a spread of queries against direct computation at the medium.
+    double worst = 0.0;
+    for (double sigma_s : {0.2, 1.0, 4.0})
+        for (double g : {-0.4, 0.0, 0.3})
+            for (double d : {0.1, 0.7, 2.0}) {
+                const HomogeneousMedium m{sigma_s, 0.1, g};
+                const ZhVector q = loaded.point_single().single(m, d), ref = point_single_zh(m, d);
+                for (int l = 0; l < kImpulseOrder; ++l)
+                    if (std::fabs(ref[size_t(l)]) > 1e-3 * std::fabs(ref[0]))
+                        worst = std::max(worst, std::fabs(q[size_t(l)] - ref[size_t(l)]) /
+                                                    std::fabs(ref[size_t(l)]));
+            }
+    const json report = {{"file", out},        {"bytes", std::filesystem::file_size(out)},
+                         {"bounces", bounces}, {"build_s", build_s},
+                         {"load_ms", load_ms}, {"verify_worst_relative_error", worst}};
+    std::cout << report.dump(2) << std::endl;
+    if (worst > 0.005) throw Error(out, "verify", "table queries are off by more than 0.5 %");
     return 0;
 }
 

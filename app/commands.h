@@ -47,6 +47,9 @@ struct TablesQueryArgs {
     std::string bounces = "1";  // all | N
 };
 int run_tables_query(const TablesQueryArgs& args);
+// Generates (or reuses) the table file, then verifies it against direct computation.
+int run_tables_generate(const std::string& out, int bounces);
+constexpr int kDefaultTableBounces = 30;
 
 // Frames "A:B" → [A, B); "N" → [N, N+1). Throws Error naming --frames.
 std::pair<int, int> parse_frame_range(const std::string& text, int frame_count);

@@ -123,7 +123,10 @@ int main(int argc, char** argv) {
     tables->add_option("--sigma-s", tq.sigma_s, "scattering coefficient");
     tables->add_option("--sigma-a", tq.sigma_a, "absorption coefficient");
     tables->add_option("--g", tq.g, "Henyey-Greenstein anisotropy, |g| <= 0.6");
-    tables->add_option("--bounces", tq.bounces, "1 (all / N arrive with multiple scattering)");
+    tables->add_option("--bounces", tq.bounces,
+                       "1, N or all (multiple scattering: point emitters)");
+    std::string tables_out;
+    tables->add_option("--out", tables_out, "table file to write (default: the cache)");
     auto* bake = app.add_subcommand("bake", "lightmap / probe baking with media (to come)");
     bake->allow_extras();
     auto* bench = app.add_subcommand("bench", "time-vs-error study (to come)");
@@ -135,7 +138,8 @@ int main(int argc, char** argv) {
         if (*compare) return freqlab::run_compare(c);
         if (*figure) return freqlab::run_figure(fa);
         if (*tables) {
-            if (!tables_query) return not_yet("tables (generation to a versioned file)");
+            if (!tables_query)
+                return freqlab::run_tables_generate(tables_out, freqlab::kDefaultTableBounces);
             return freqlab::run_tables_query(tq);
         }
         if (*bake) return not_yet("bake");

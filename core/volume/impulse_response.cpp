@@ -193,28 +193,48 @@ ZhDistanceTable::ZhDistanceTable(Trend trend, const std::vector<ZhVector>& canon
     }
 }
 
+std::vector<ZhVector> ZhDistanceTable::canonical() const {
+    std::vector<ZhVector> out(kBins);
+    for (int i = 0; i < kBins; ++i)
+        for (int l = 0; l < kImpulseOrder; ++l)
+            out[size_t(i)][size_t(l)] = scaled_[size_t(i)][size_t(l)] * trend(distance_of_bin(i));
+    return out;
+}
+
 double ZhDistanceTable::trend(double D) const {
     return trend_ == Trend::PointLike ? std::exp(-D) / D : std::exp(-D);
 }
 
-ZhVector ZhDistanceTable::at(double D) const {
-    ZhVector z{};
-    if (!(D > 0) || D >= kMaxD) return z;  // beyond kMaxD the response is below e^-40
+ZhDistanceTable::Stencil ZhDistanceTable::stencil(Trend trend, double D) {
+    Stencil st{};
+    st.valid = D > 0 && D < kMaxD;  // beyond kMaxD the response is below e^-40
+    if (!st.valid) return st;
     const double u = std::log(std::max(D, kMinD) / kMinD) / std::log(kMaxD / kMinD) * (kBins - 1);
     const int i = std::min(int(u), kBins - 2);
-    const double f = u - i;
+    const double f = u - i, f2 = f * f, f3 = f2 * f;
     // Catmull-Rom in log D: linear interpolation left 0.8 % errors on high-order coefficients
-    // near their zero crossings (tests/test_impulse_response.cpp); the cubic is exact for
-    // quadratics and costs four reads.
-    const int i0 = std::max(i - 1, 0), i3 = std::min(i + 2, kBins - 1);
-    const double f2 = f * f, f3 = f2 * f;
-    const double w0 = -0.5 * f3 + f2 - 0.5 * f, w1 = 1.5 * f3 - 2.5 * f2 + 1.0,
-                 w2 = -1.5 * f3 + 2.0 * f2 + 0.5 * f, w3 = 0.5 * f3 - 0.5 * f2;
-    for (int l = 0; l < kImpulseOrder; ++l)
-        z[size_t(l)] =
-            (w0 * scaled_[size_t(i0)][size_t(l)] + w1 * scaled_[size_t(i)][size_t(l)] +
-             w2 * scaled_[size_t(i) + 1][size_t(l)] + w3 * scaled_[size_t(i3)][size_t(l)]) *
-            trend(D);
+    // near their zero crossings (tests/test_impulse_response.cpp).
+    st.bin[0] = std::max(i - 1, 0);
+    st.bin[1] = i;
+    st.bin[2] = i + 1;
+    st.bin[3] = std::min(i + 2, kBins - 1);
+    st.weight[0] = -0.5 * f3 + f2 - 0.5 * f;
+    st.weight[1] = 1.5 * f3 - 2.5 * f2 + 1.0;
+    st.weight[2] = -1.5 * f3 + 2.0 * f2 + 0.5 * f;
+    st.weight[3] = 0.5 * f3 - 0.5 * f2;
+    st.trend = trend == Trend::PointLike ? std::exp(-D) / D : std::exp(-D);
+    return st;
+}
+
+ZhVector ZhDistanceTable::at(double D) const {
+    ZhVector z{};
+    const Stencil st = stencil(trend_, D);
+    if (!st.valid) return z;
+    for (int l = 0; l < kImpulseOrder; ++l) {
+        double v = 0;
+        for (int k = 0; k < 4; ++k) v += st.weight[k] * scaled_[size_t(st.bin[k])][size_t(l)];
+        z[size_t(l)] = v * st.trend;
+    }
     return z;
 }
 
@@ -236,20 +256,54 @@ SingleScatterTable::SingleScatterTable(Emitter emitter) : emitter_(emitter) {
             column[size_t(i)] = responses[size_t(i)][size_t(j)];
         terms_.emplace_back(trend, column);
     }
+    pack();
+}
+
+SingleScatterTable::SingleScatterTable(Emitter emitter,
+                                       const std::vector<std::vector<ZhVector>>& terms)
+    : emitter_(emitter) {
+    const ZhDistanceTable::Trend trend = emitter == Emitter::Point
+                                             ? ZhDistanceTable::Trend::PointLike
+                                             : ZhDistanceTable::Trend::DirectionalLike;
+    for (const std::vector<ZhVector>& column : terms) terms_.emplace_back(trend, column);
+    pack();
+}
+
+void SingleScatterTable::pack() {
+    const size_t nb = ZhDistanceTable::kBins, nt = terms_.size(), no = kImpulseOrder;
+    packed_.assign(nb * nt * no, 0.0);
+    for (size_t j = 0; j < nt; ++j)
+        for (size_t i = 0; i < nb; ++i)
+            for (size_t l = 0; l < no; ++l)
+                packed_[(i * nt + j) * no + l] = terms_[j].scaled()[i][l];
+}
+
+std::vector<std::vector<ZhVector>> SingleScatterTable::canonical_terms() const {
+    std::vector<std::vector<ZhVector>> out;
+    for (const ZhDistanceTable& t : terms_) out.push_back(t.canonical());
+    return out;
 }
 
 ZhVector SingleScatterTable::single(const HomogeneousMedium& m, double distance) const {
-    // HG = sum_k g^k b_k: the response is the same sum of the basis responses.
     ZhVector z{};
+    const ZhDistanceTable::Trend trend = emitter_ == Emitter::Point
+                                             ? ZhDistanceTable::Trend::PointLike
+                                             : ZhDistanceTable::Trend::DirectionalLike;
+    const ZhDistanceTable::Stencil st = ZhDistanceTable::stencil(trend, m.sigma_t() * distance);
+    if (!st.valid) return z;
+    // HG = sum_k g^k b_k: the response is the same sum of the basis responses; terms below
+    // |g|^k = 1e-10 are skipped (12 terms at |g| = 0.15, 32 at |g| = 0.5).
+    const size_t nt = terms_.size();
     double gk = 1.0;
-    const double D = m.sigma_t() * distance;
-    for (int j = 0; j < kPhaseTerms; ++j, gk *= m.g) {
-        const ZhVector t = terms_[size_t(j)].at(D);
-        for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += gk * t[size_t(l)];
-    }
+    for (size_t j = 0; j < nt && std::fabs(gk) > 1e-10; ++j, gk *= m.g)
+        for (int k = 0; k < 4; ++k) {
+            const double w = gk * st.weight[k];
+            const double* row = &packed_[(size_t(st.bin[k]) * nt + j) * kImpulseOrder];
+            for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += w * row[l];
+        }
     // Optical-distance substitution (see the header): the factors were derived, then tested.
     const double factor =
-        emitter_ == Emitter::Point ? m.sigma_s * m.sigma_t() : m.sigma_s / m.sigma_t();
+        (emitter_ == Emitter::Point ? m.sigma_s * m.sigma_t() : m.sigma_s / m.sigma_t()) * st.trend;
     for (double& v : z) v *= factor;
     return z;
 }

@@ -65,6 +65,18 @@ class ZhDistanceTable {
 
     ZhDistanceTable(Trend trend, const std::vector<ZhVector>& canonical);  // kBins entries
     ZhVector at(double optical_distance) const;
+    std::vector<ZhVector> canonical() const;  // the kBins tabulated vectors (for saving)
+    const std::vector<ZhVector>& scaled() const { return scaled_; }
+
+    // The four bins and Catmull-Rom weights around D, and the trend to multiply back; `valid`
+    // is false outside (0, kMaxD). Shared so that many tables on one grid interpolate once.
+    struct Stencil {
+        int bin[4];
+        double weight[4];
+        double trend;
+        bool valid;
+    };
+    static Stencil stencil(Trend trend, double optical_distance);
 
   private:
     double trend(double D) const;
@@ -76,14 +88,19 @@ class ZhDistanceTable {
 class SingleScatterTable {
   public:
     enum class Emitter { Point, Directional };
-    explicit SingleScatterTable(Emitter emitter);
+    explicit SingleScatterTable(Emitter emitter);  // tabulates (~0.3 s on 2 cores)
+    // From saved values: terms[k][bin] is the canonical response to phase basis term k.
+    SingleScatterTable(Emitter emitter, const std::vector<std::vector<ZhVector>>& terms);
+    std::vector<std::vector<ZhVector>> canonical_terms() const;
     // Single-scattered ZH at `distance` (point: to the emitter; directional: to the medium's
     // boundary) in `medium`.
     ZhVector single(const HomogeneousMedium& medium, double distance) const;
 
   private:
+    void pack();
     Emitter emitter_;
     std::vector<ZhDistanceTable> terms_;  // one per phase basis term
+    std::vector<double> packed_;          // [bin][term][l] scaled values: one query reads 4 blocks
 };
 
 }  // namespace freqlab

@@ -98,21 +98,31 @@ PointMultipleScatter::PointMultipleScatter(int bounces)
                 std::sqrt(4.0 * kPiD) * z[0] * D * D * std::exp(D);
         });
     }
+    scale();
+}
+
+void PointMultipleScatter::scale() {
+    zh_scaled_ = zh_;
+    for (auto& row : zh_scaled_)
+        for (int i = 0; i < ZhDistanceTable::kBins; ++i) {
+            const double D = ZhDistanceTable::distance_of_bin(i);
+            for (double& v : row[size_t(i)]) v *= D * D * std::exp(D);
+        }
 }
 
 ZhVector PointMultipleScatter::canonical(int k, double D) const {
     ZhVector z{};
-    if (!(D > 0) || D >= ZhDistanceTable::kMaxD || k < 1 || k > bounces()) return z;
-    const double u = grid_u(std::max(D, ZhDistanceTable::kMinD));
-    const double trend = std::exp(-D) / (D * D), grid_trend_inv = 1.0;
-    std::vector<double> column(ZhDistanceTable::kBins);
-    for (int l = 0; l < kImpulseOrder; ++l) {
-        for (int i = 0; i < ZhDistanceTable::kBins; ++i) {
-            const double Di = ZhDistanceTable::distance_of_bin(i);
-            column[size_t(i)] = zh_[size_t(k)][size_t(i)][size_t(l)] * Di * Di * std::exp(Di);
-        }
-        z[size_t(l)] = catmull_rom(column, u) * trend * grid_trend_inv;
+    if (k < 1 || k > bounces()) return z;
+    // Same grid and stencil as the single-scattering tables; the trend here is e^-D / D^2.
+    const ZhDistanceTable::Stencil st =
+        ZhDistanceTable::stencil(ZhDistanceTable::Trend::PointLike, D);
+    if (!st.valid) return z;
+    const double trend = std::exp(-D) / (D * D);
+    for (int j = 0; j < 4; ++j) {
+        const ZhVector& row = zh_scaled_[size_t(k)][size_t(st.bin[j])];
+        for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += st.weight[j] * row[size_t(l)];
     }
+    for (double& v : z) v *= trend;
     return z;
 }
 

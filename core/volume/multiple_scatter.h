@@ -28,6 +28,14 @@ class PointMultipleScatter {
   public:
     // Bounces 1..bounces (bounce 0 is the direct term).
     explicit PointMultipleScatter(int bounces);
+    // From saved values: fluence_scaled[k][bin] = phi_k(D) D^2 e^D, zh[k][bin] (k = 0 unused).
+    PointMultipleScatter(std::vector<std::vector<double>> fluence_scaled,
+                         std::vector<std::vector<ZhVector>> zh)
+        : fluence_scaled_(std::move(fluence_scaled)), zh_(std::move(zh)) {
+        scale();
+    }
+    const std::vector<std::vector<double>>& fluence_scaled() const { return fluence_scaled_; }
+    const std::vector<std::vector<ZhVector>>& zh() const { return zh_; }
     int bounces() const { return int(zh_.size()) - 1; }
     // Canonical ZH of bounce k (1 <= k <= bounces) at optical distance D.
     ZhVector canonical(int k, double optical_distance) const;
@@ -40,6 +48,8 @@ class PointMultipleScatter {
   private:
     std::vector<std::vector<double>> fluence_scaled_;  // [k][bin]: phi_k(D) D^2 e^D
     std::vector<std::vector<ZhVector>> zh_;            // [k][bin] (k = 0 unused)
+    std::vector<std::vector<ZhVector>> zh_scaled_;     // zh_ x D^2 e^D: what is interpolated
+    void scale();
 };
 
 }  // namespace freqlab

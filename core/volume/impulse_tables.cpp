@@ -1,0 +1,164 @@
+#include "volume/impulse_tables.h"
+
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "base/error.h"
+#include "base/file_io.h"
+#include "base/hash.h"
+
+namespace freqlab {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr const char* kMagic = "freqlab-impulse-tables";
+
+void put(std::vector<float>& out, const ZhVector& z) {
+    for (double v : z) out.push_back(float(v));
+}
+
+ZhVector take(const float*& p) {
+    ZhVector z;
+    for (double& v : z) v = double(*p++);
+    return z;
+}
+
+}  // namespace
+
+ImpulseTables ImpulseTables::build(int bounces, Progress* progress) {
+    ImpulseTables t;
+    if (progress) progress->begin_stage("point single scattering", 1);
+    t.point_single_ = std::make_shared<SingleScatterTable>(SingleScatterTable::Emitter::Point);
+    if (progress) progress->begin_stage("directional single scattering", 1);
+    t.directional_single_ =
+        std::make_shared<SingleScatterTable>(SingleScatterTable::Emitter::Directional);
+    if (progress) progress->begin_stage("multiple scattering", 1);
+    t.point_multiple_ = std::make_shared<PointMultipleScatter>(bounces);
+    return t;
+}
+
+void ImpulseTables::save(const fs::path& path) const {
+    std::vector<float> payload;
+    for (const SingleScatterTable* table : {point_single_.get(), directional_single_.get()})
+        for (const auto& column : table->canonical_terms())
+            for (const ZhVector& z : column) put(payload, z);
+    const int bounces = point_multiple_->bounces();
+    for (int k = 1; k <= bounces; ++k)
+        for (const ZhVector& z : point_multiple_->zh()[size_t(k)]) put(payload, z);
+    for (int k = 0; k <= bounces; ++k)
+        for (double v : point_multiple_->fluence_scaled()[size_t(k)]) payload.push_back(float(v));
+    const std::string bytes(reinterpret_cast<const char*>(payload.data()),
+                            payload.size() * sizeof(float));
+    const json header = {{"version", kFormatVersion},
+                         {"order", kImpulseOrder},
+                         {"bins", ZhDistanceTable::kBins},
+                         {"min_d", ZhDistanceTable::kMinD},
+                         {"max_d", ZhDistanceTable::kMaxD},
+                         {"phase_terms", kPhaseTerms},
+                         {"bounces", bounces},
+                         {"payload_floats", payload.size()},
+                         {"checksum", std::to_string(fnv1a(bytes))}};
+    if (path.has_parent_path()) fs::create_directories(path.parent_path());
+    write_text_atomically(path, std::string(kMagic) + "\n" + header.dump() + "\n" + bytes);
+}
+
+ImpulseTables ImpulseTables::load(const fs::path& path) {
+    const std::string file = path.string();
+    const std::string text = read_text_file(path);
+    const size_t l1 = text.find('\n'), l2 = l1 == std::string::npos ? l1 : text.find('\n', l1 + 1);
+    if (l1 == std::string::npos || l2 == std::string::npos || text.compare(0, l1, kMagic) != 0)
+        throw Error(file, "header",
+                    "not a freqlab impulse-table file (regenerate with `freqlab tables`)");
+    const json h = json::parse(text.substr(l1 + 1, l2 - l1 - 1), nullptr, false);
+    if (h.is_discarded()) throw Error(file, "header", "malformed JSON header");
+    auto expect = [&](const char* field, double value) {
+        if (!h.contains(field) || !h[field].is_number() || h[field].get<double>() != value)
+            throw Error(
+                file, field,
+                "expected " + std::to_string(value) + ", got " +
+                    (h.contains(field) ? h[field].dump() : "nothing") +
+                    " (tables from another freqlab version: regenerate with `freqlab tables`)");
+    };
+    expect("version", kFormatVersion);
+    expect("order", kImpulseOrder);
+    expect("bins", ZhDistanceTable::kBins);
+    expect("min_d", ZhDistanceTable::kMinD);
+    expect("max_d", ZhDistanceTable::kMaxD);
+    expect("phase_terms", kPhaseTerms);
+    const int bounces = h.value("bounces", -1);
+    if (bounces < 1 || bounces > 1000) throw Error(file, "bounces", "expected 1 to 1000");
+    const std::string bytes = text.substr(l2 + 1);
+    const size_t bins = ZhDistanceTable::kBins, order = kImpulseOrder;
+    const size_t expected = 2 * kPhaseTerms * bins * order + size_t(bounces) * bins * order +
+                            size_t(bounces + 1) * bins;
+    if (bytes.size() != expected * sizeof(float) ||
+        h.value("payload_floats", size_t(0)) != expected)
+        throw Error(file, "payload",
+                    "expected " + std::to_string(expected) + " floats, the file has " +
+                        std::to_string(bytes.size() / sizeof(float)) + " (truncated?)");
+    if (h.value("checksum", std::string()) != std::to_string(fnv1a(bytes)))
+        throw Error(file, "checksum", "the payload does not match its checksum (damaged file)");
+    std::vector<float> payload(expected);
+    std::memcpy(payload.data(), bytes.data(), bytes.size());
+    const float* p = payload.data();
+    ImpulseTables t;
+    for (int e = 0; e < 2; ++e) {
+        std::vector<std::vector<ZhVector>> terms(kPhaseTerms, std::vector<ZhVector>(bins));
+        for (auto& column : terms)
+            for (ZhVector& z : column) z = take(p);
+        const auto emitter =
+            e == 0 ? SingleScatterTable::Emitter::Point : SingleScatterTable::Emitter::Directional;
+        (e == 0 ? t.point_single_ : t.directional_single_) =
+            std::make_shared<SingleScatterTable>(emitter, terms);
+    }
+    std::vector<std::vector<ZhVector>> zh(size_t(bounces) + 1, std::vector<ZhVector>(bins));
+    for (int k = 1; k <= bounces; ++k)
+        for (ZhVector& z : zh[size_t(k)]) z = take(p);
+    std::vector<std::vector<double>> fluence(size_t(bounces) + 1, std::vector<double>(bins));
+    for (auto& row : fluence)
+        for (double& v : row) v = double(*p++);
+    t.point_multiple_ = std::make_shared<PointMultipleScatter>(std::move(fluence), std::move(zh));
+    return t;
+}
+
+fs::path ImpulseTables::default_path(int bounces) {
+    fs::path dir;
+    if (const char* d = std::getenv("FREQLAB_CACHE_DIR"); d && *d)
+        dir = d;
+    else if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x)
+        dir = fs::path(x) / "freqlab";
+    else if (const char* home = std::getenv("HOME"); home && *home)
+        dir = fs::path(home) / ".cache" / "freqlab";
+    else
+        dir = fs::temp_directory_path() / "freqlab-cache";
+    return dir / "tables" /
+           ("impulse_v" + std::to_string(kFormatVersion) + "_b" + std::to_string(bounces) + ".bin");
+}
+
+ImpulseTables ImpulseTables::cached(int bounces, std::string* path_used) {
+    const fs::path path = default_path(bounces);
+    if (path_used) *path_used = path.string();
+    std::error_code ec;
+    if (fs::is_regular_file(path, ec)) {
+        try {
+            return load(path);
+        } catch (const Error&) {
+            // A stale or damaged cache is rebuilt, not fatal.
+        }
+    }
+    ImpulseTables t = build(bounces);
+    try {
+        t.save(path);
+    } catch (const std::exception&) {
+    }
+    return t;
+}
+
+}  // namespace freqlab
