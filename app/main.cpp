@@ -74,7 +74,8 @@ int main(int argc, char** argv) {
     gui->add_option("--method", gui_method, "gbuffer|mis|reference");
     gui->add_option("--set", gui_sets, "key=value setting (repeatable)");
     std::string gui_inspect, gui_warm, gui_session;
-    bool gui_compare = false;
+    bool gui_compare = false, gui_tables = false;
+    gui->add_flag("--tables", gui_tables, "open the method B tables panel");
     gui->add_flag("--compare", gui_compare, "render the frame's reference and show the split view");
     gui->add_option("--session", gui_session,
                     "session JSON to load (File > Save session writes one)");
@@ -155,6 +156,7 @@ int main(int argc, char** argv) {
         options.settings = gui_sets;
         options.session = gui_session;
         options.compare = gui_compare;
+        options.show_tables = gui_tables;
         if (!gui_inspect.empty()) {
             if (std::sscanf(gui_inspect.c_str(), "%d,%d", &options.inspect_x, &options.inspect_y) !=
                 2)

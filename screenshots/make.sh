@@ -15,3 +15,4 @@ xvfb-run -a -s "-screen 0 1280x800x24" "$bin" gui scenes/creatures.json --method
      --set mis.spp=16 --overlay normal --screenshot screenshots/window_creatures_normals.png
 shot compare_split.png scenes/rotor.json --method mis --set mis.spp=4 --set reference.spp=256 \
      --set frame.width=480 --set frame.height=270 --frame 0 --compare
+shot tables_panel.png builtin:default --method gbuffer --frame 0 --tables

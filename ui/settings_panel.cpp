@@ -56,10 +56,11 @@ uint32_t draw_field(const SettingsSchema& schema, const SettingField& f, void* o
 
 }  // namespace
 
-uint32_t draw_settings(const SettingsGroup& group) {
+uint32_t draw_settings(const SettingsGroup& group, bool open) {
     uint32_t flags = 0;
     for (const SettingsGroup::Binding& b : group.bindings()) {
-        if (!ImGui::CollapsingHeader(b.schema->title().c_str(), ImGuiTreeNodeFlags_DefaultOpen))
+        if (!ImGui::CollapsingHeader(b.schema->title().c_str(),
+                                     open ? ImGuiTreeNodeFlags_DefaultOpen : 0))
             continue;
         for (const SettingField& f : b.schema->fields())
             flags |= draw_field(*b.schema, f, b.object);

@@ -9,6 +9,7 @@
 
 namespace freqlab::ui {
 
-uint32_t draw_settings(const SettingsGroup& group);
+// `open` decides whether the sections start expanded.
+uint32_t draw_settings(const SettingsGroup& group, bool open = true);
 
 }  // namespace freqlab::ui

@@ -103,13 +103,14 @@ void draw_settings_panel(Workbench::State& s) {
             "gbuffer: primary rays only; mis: MIS direct lighting at mis.spp; "
             "reference: the same at reference.spp (cached on disk)");
     SettingsGroup group = s.config.settings_group();
-    const uint32_t changed = draw_settings(group);
+    const uint32_t changed = draw_settings(group, !s.options.show_tables);
     if (changed & (kInvalidatesGBuffer | kInvalidatesShading))
         restart_renderer(s);
     else if (changed & kInvalidatesDisplay)
         s.view_dirty = true;
 
     draw_compare_panel(s);
+    draw_tables_panel(*s.tables);
     if (ImGui::CollapsingHeader("Help")) {
         ImGui::TextWrapped(
             "Space: play / pause    Left / Right: previous / next frame\n"
@@ -398,6 +399,7 @@ void Workbench::reset(const WorkbenchOptions& options) {
     s.layer_name = options.layer.empty() ? "color" : options.layer;
     if (!options.show_timings) s.stat_index = 1;  // rays: the same on every host
     s.split = options.compare;
+    s.tables->open = options.show_tables;
     s.pick_x = options.inspect_x;
     s.pick_y = options.inspect_y;
     s.error.clear();
@@ -567,6 +569,11 @@ const std::string& Workbench::error() const {
     return s_->error;
 }
 
+bool Workbench::tables_ready() const {
+    std::lock_guard<std::mutex> lock(s_->tables->mutex);
+    return s_->tables->tables != nullptr;
+}
+
 void render_ui_frame(GlHost& host, Workbench& workbench) {
     host.begin_frame();
     ImGui_ImplOpenGL3_NewFrame();
@@ -600,6 +607,11 @@ int run_loop(GlHost& host, Workbench& wb, const WorkbenchOptions& options, bool 
         wb.set_frame(options.frame);
     }
     if (options.inspect_x >= 0) wb.select_pixel(options.inspect_x, options.inspect_y);
+    if (options.show_tables)
+        for (int i = 0; i < 100000 && !wb.tables_ready(); ++i) {
+            render_ui_frame(host, wb);
+            host.end_frame();
+        }
     if (options.compare) {
         for (int i = 0; i < 1000 && !wb.frame_shown(); ++i) {
             wb.wait_for_render();

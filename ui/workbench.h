@@ -33,8 +33,9 @@ struct WorkbenchOptions {
     // Wall-clock timings on screen (status line, stats strip, inspector). Off gives pictures
     // that depend only on the state: what tests compare across hosts.
     bool show_timings = true;
-    std::string session;   // a session JSON to load at start (overrides the fields above)
-    bool compare = false;  // render the reference of the frame and show the split view
+    std::string session;       // a session JSON to load at start (overrides the fields above)
+    bool compare = false;      // render the reference of the frame and show the split view
+    bool show_tables = false;  // open the method B tables panel (and wait for the tables)
 };
 
 struct ScreenRect {
@@ -81,6 +82,7 @@ class Workbench {
     void request_reference();
     bool reference_busy() const;
     const ImageMetrics* metrics() const;
+    bool tables_ready() const;  // the tables panel has its tables
 
     struct State;  // defined in workbench.cpp; public so its helper functions can name it
 

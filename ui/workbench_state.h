@@ -16,6 +16,7 @@
 #include "layer_view.h"
 #include "render/frame_renderer.h"
 #include "scene/scene.h"
+#include "tables_panel.h"
 #include "workbench.h"
 
 namespace freqlab::ui {
@@ -68,6 +69,7 @@ struct Workbench::State {
     std::vector<std::string> trace_lines;  // the inspector's pixel trace
     std::pair<int, int> trace_pixel{-1, -1};
     int trace_frame = -1;
+    std::unique_ptr<TablesPanelState> tables = make_tables_panel();
     std::string session_path = "freqlab-out/session.json";
 };
 

@@ -1,0 +1,131 @@
+#include "tables_panel.h"
+
+#include <imgui.h>
+
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+
+#include "base/job.h"
+#include "image/colormap.h"
+#include "math/sh.h"
+#include "volume/impulse_tables.h"
+
+namespace freqlab::ui {
+
+std::unique_ptr<TablesPanelState> make_tables_panel() {
+    return std::make_unique<TablesPanelState>();
+}
+
+namespace {
+
+constexpr int kTableBounces = 30;
+
+ZhVector response(const TablesPanelState& s, double d) {
+    const HomogeneousMedium m{s.sigma_s, s.sigma_a, s.g};
+    const bool point = s.emitter == 0;
+    // In-scattered light only: the direct term is a delta towards the emitter (closed form).
+    ZhVector z{};
+    const ZhVector single =
+        (point ? s.tables->point_single() : s.tables->directional_single()).single(m, d);
+    ZhVector multiple{};
+    if (point && s.bounces > 1) {
+        HomogeneousMedium similar = m;  // multiple scattering is isotropic, by similarity
+        similar.sigma_s = m.sigma_s * (1.0 - m.g);
+        similar.g = 0.0;
+        multiple = s.tables->point_multiple().bounces_in(similar, d, 2, s.bounces);
+    }
+    for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += single[size_t(l)] + multiple[size_t(l)];
+    return z;
+}
+
+ImU32 colour(int l) {
+    const vec3 c = viridis(float(l) / (kImpulseOrder - 1));
+    return ImGui::ColorConvertFloat4ToU32(ImVec4(c.r, c.g, c.b, 1.0f));
+}
+
+}  // namespace
+
+void draw_tables_panel(TablesPanelState& s) {
+    if (!ImGui::CollapsingHeader("Method B tables", s.open ? ImGuiTreeNodeFlags_DefaultOpen : 0))
+        return;
+    if (!s.tables && !s.job) {
+        TablesPanelState* sp = &s;
+        s.job = std::make_unique<Job>([sp](Progress&) {
+            std::string path;
+            auto t = std::make_shared<ImpulseTables>(ImpulseTables::cached(kTableBounces, &path));
+            std::lock_guard<std::mutex> lock(sp->mutex);
+            sp->tables = t;
+            sp->path = path;
+        });
+    }
+    {
+        std::lock_guard<std::mutex> lock(s.mutex);
+        if (!s.tables) {
+            ImGui::TextDisabled("loading or building the tables (a few seconds, once)...");
+            return;
+        }
+    }
+    ImGui::Combo("emitter", &s.emitter, "point\0directional\0");
+    ImGui::SliderFloat("sigma_s", &s.sigma_s, 0.01f, 10.0f, "%.3g", ImGuiSliderFlags_Logarithmic);
+    ImGui::SliderFloat("sigma_a", &s.sigma_a, 0.0f, 5.0f, "%.3g");
+    ImGui::SliderFloat("g", &s.g, -0.6f, 0.6f, "%.2f");
+    if (s.emitter == 0) ImGui::SliderInt("bounces", &s.bounces, 1, kTableBounces);
+    ImGui::SliderFloat("lobe at d", &s.lobe_distance, 0.01f, 10.0f, "%.3g",
+                       ImGuiSliderFlags_Logarithmic);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("tables: %s", s.path.c_str());
+
+    // Legendre moments <P_l> = z_l / (z_0 sqrt(2l+1)) of the in-scattered light against log
+    // distance: 1 is a delta towards the emitter, 0 isotropic; they fall as light diffuses.
+    ImDrawList* dl = ImGui::GetWindowDrawList();
+    const float w = ImGui::GetContentRegionAvail().x, h = 110;
+    ImVec2 o = ImGui::GetCursorScreenPos();
+    dl->AddRectFilled(o, ImVec2(o.x + w, o.y + h), IM_COL32(30, 30, 34, 255));
+    dl->AddLine(ImVec2(o.x, o.y + h / 2), ImVec2(o.x + w, o.y + h / 2), IM_COL32(80, 80, 80, 255));
+    const int n = 96;
+    for (int l = 1; l < kImpulseOrder; ++l) {
+        ImVec2 prev;
+        for (int i = 0; i < n; ++i) {
+            const double d = 0.01 * std::pow(1000.0, double(i) / (n - 1));
+            const ZhVector z = response(s, d);
+            const double moment =
+                z[0] != 0 ? z[size_t(l)] / (z[0] * std::sqrt(2.0 * l + 1.0)) : 0.0;
+            const ImVec2 p(o.x + w * i / (n - 1),
+                           o.y + h * float(0.5 - 0.45 * std::clamp(moment, -1.0, 1.0)));
+            if (i) dl->AddLine(prev, p, colour(l), 1.2f);
+            prev = p;
+        }
+    }
+    dl->AddText(ImVec2(o.x + 4, o.y + 2), IM_COL32(200, 200, 200, 255),
+                "<P_l> of in-scattered light, l = 1..10, d = 0.01..10");
+    ImGui::Dummy(ImVec2(w, h + 4));
+
+    // Polar cross-section of the in-scattered response at one distance; emitter to the right.
+    const ZhVector z = response(s, s.lobe_distance);
+    const float size = std::min(w, 160.0f);
+    o = ImGui::GetCursorScreenPos();
+    const ImVec2 c(o.x + size / 2, o.y + size / 2);
+    dl->AddRectFilled(o, ImVec2(o.x + size, o.y + size), IM_COL32(30, 30, 34, 255));
+    double peak = 0;
+    std::vector<double> r(181);
+    for (int i = 0; i <= 180; ++i) {
+        r[size_t(i)] = std::fabs(zh_eval(kImpulseOrder, z.data(), std::cos(M_PI * i / 180.0)));
+        peak = std::max(peak, r[size_t(i)]);
+    }
+    ImVec2 prev;
+    for (int i = -180; i <= 180; ++i) {
+        const double theta = M_PI * i / 180.0, rr = peak > 0 ? r[size_t(std::abs(i))] / peak : 0.0;
+        const ImVec2 p(c.x + float(0.45 * size * rr * std::cos(theta)),
+                       c.y - float(0.45 * size * rr * std::sin(theta)));
+        if (i > -180) dl->AddLine(prev, p, IM_COL32(250, 200, 60, 255), 1.5f);
+        prev = p;
+    }
+    dl->AddLine(c, ImVec2(o.x + size - 4, c.y), IM_COL32(120, 120, 120, 255));
+    char label[64];
+    std::snprintf(label, sizeof label, "in-scattered lobe, d = %.3g (DC %.3g)", s.lobe_distance,
+                  z[0]);
+    dl->AddText(ImVec2(o.x + 4, o.y + 2), IM_COL32(200, 200, 200, 255), label);
+    ImGui::Dummy(ImVec2(size, size + 4));
+}
+
+}  // namespace freqlab::ui
