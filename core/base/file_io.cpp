@@ -1,6 +1,7 @@
 #include "base/file_io.h"
 
 #include <unistd.h>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -40,6 +41,13 @@ std::string read_text_file(const fs::path& path) {
     std::ostringstream ss;
     ss << in.rdbuf();
     return ss.str();
+}
+
+fs::path cache_directory() {
+    if (const char* d = std::getenv("FREQLAB_CACHE_DIR"); d && *d) return d;
+    if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) return fs::path(x) / "freqlab";
+    if (const char* h = std::getenv("HOME"); h && *h) return fs::path(h) / ".cache" / "freqlab";
+    return fs::temp_directory_path() / "freqlab-cache";
 }
 
 }  // namespace freqlab

@@ -14,4 +14,8 @@ void write_atomically(const std::filesystem::path& path,
 void write_text_atomically(const std::filesystem::path& path, const std::string& text);
 std::string read_text_file(const std::filesystem::path& path);  // throws Error naming the file
 
+// freqlab's cache folder: $FREQLAB_CACHE_DIR, else $XDG_CACHE_HOME/freqlab, else
+// ~/.cache/freqlab, else a temporary folder.
+std::filesystem::path cache_directory();
+
 }  // namespace freqlab

@@ -4,6 +4,7 @@
 #include <cstdlib>
 
 #include "base/error.h"
+#include "base/file_io.h"
 #include "base/hash.h"
 #include "image/image_io.h"
 
@@ -16,17 +17,7 @@ namespace {
 constexpr const char* kRendererVersion = "direct-lighting-1";
 }  // namespace
 
-ReferenceCache::ReferenceCache() {
-    if (const char* d = std::getenv("FREQLAB_CACHE_DIR"); d && *d)
-        dir_ = d;
-    else if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x)
-        dir_ = fs::path(x) / "freqlab";
-    else if (const char* h = std::getenv("HOME"); h && *h)
-        dir_ = fs::path(h) / ".cache" / "freqlab";
-    else
-        dir_ = fs::temp_directory_path() / "freqlab-cache";
-    dir_ /= "reference";
-}
+ReferenceCache::ReferenceCache() : dir_(cache_directory() / "reference") {}
 
 std::string ReferenceCache::key(uint64_t scene_hash, const nlohmann::json& settings,
                                 int frame) const {

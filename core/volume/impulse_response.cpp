@@ -1,5 +1,7 @@
 #include "volume/impulse_response.h"
 
+#include "math/sh.h"
+
 #include <tbb/parallel_for.h>
 #include <boost/math/quadrature/gauss.hpp>
 
@@ -11,12 +13,10 @@ namespace {
 
 constexpr double kPiD = 3.14159265358979323846;
 
-double zh_basis(int l, double cos_theta, double* p /* scratch, >= l+1 */) {
-    p[0] = 1.0;
-    if (l >= 1) p[1] = cos_theta;
-    for (int k = 2; k <= l; ++k)
-        p[k] = ((2.0 * k - 1.0) * cos_theta * p[k - 1] - (k - 1.0) * p[k - 2]) / k;
-    return std::sqrt((2.0 * l + 1.0) / (4.0 * kPiD)) * p[l];
+// y_l^0 for every l at once (math/sh.h's Legendre recurrence).
+void zh_basis_all(double cos_theta, double* y) {
+    legendre(kImpulseOrder, cos_theta, y);
+    for (int l = 0; l < kImpulseOrder; ++l) y[l] *= std::sqrt((2.0 * l + 1.0) / (4.0 * kPiD));
 }
 
 // Phase functions as a small set of terms whose responses are accumulated together: HG
@@ -77,7 +77,7 @@ void point_single(double sigma_s, double sigma_t, double d, const Phase& phase, 
     // Panels graded towards theta = 0, where the response to a forward-peaked phase function
     // and to short distances concentrates.
     const int panels = 40;
-    double p[kImpulseOrder], radiance[Phase::count], basis[kImpulseOrder];
+    double radiance[Phase::count], basis[kImpulseOrder];
     const auto& x = gauss<double, 12>::abscissa();
     const auto& w = gauss<double, 12>::weights();
     for (int i = 0; i < panels; ++i) {
@@ -87,7 +87,7 @@ void point_single(double sigma_s, double sigma_t, double d, const Phase& phase, 
             for (double sign : {-1.0, 1.0}) {
                 const double theta = 0.5 * (a + b) + sign * 0.5 * (b - a) * x[k];
                 point_radiance_times_sin(sigma_s, sigma_t, d, theta, phase, radiance);
-                for (int l = 0; l < kImpulseOrder; ++l) basis[l] = zh_basis(l, std::cos(theta), p);
+                zh_basis_all(std::cos(theta), basis);
                 const double weight = 2.0 * kPiD * w[k] * 0.5 * (b - a);
                 for (int j = 0; j < Phase::count; ++j)
                     for (int l = 0; l < kImpulseOrder; ++l)
@@ -102,7 +102,7 @@ void directional_single(double sigma_s, double sigma_t, double s, const Phase& p
                         ZhVector* out) {
     using boost::math::quadrature::gauss;
     for (int j = 0; j < Phase::count; ++j) out[j] = ZhVector{};
-    double p[kImpulseOrder], terms[Phase::count];
+    double terms[Phase::count];
     const auto& x = gauss<double, 12>::abscissa();
     const auto& w = gauss<double, 12>::weights();
     // Panels split at mu = 0 (where t_max becomes infinite) and graded towards mu = 1.
@@ -129,23 +129,27 @@ void directional_single(double sigma_s, double sigma_t, double s, const Phase& p
                     const double common =
                         2.0 * kPiD * sigma_s * std::exp(-sigma_t * s) * path * w[k] * 0.5 * (b - a);
                     phase.eval(mu, terms);
-                    for (int l = 0; l < kImpulseOrder; ++l) {
-                        const double y = zh_basis(l, mu, p);
+                    double y[kImpulseOrder];
+                    zh_basis_all(mu, y);
+                    for (int l = 0; l < kImpulseOrder; ++l)
                         for (int j = 0; j < Phase::count; ++j)
-                            out[j][size_t(l)] += common * terms[j] * y;
-                    }
+                            out[j][size_t(l)] += common * terms[j] * y[l];
                 }
         }
 }
 
 }  // namespace
 
-ZhVector point_direct_zh(const HomogeneousMedium& m, double d) {
+// ZH of `weight` times a delta on the axis: weight y_l^0(axis).
+ZhVector axis_delta_zh(double weight) {
     ZhVector z{};
-    const double weight = std::exp(-m.sigma_t() * d) / (d * d);
     for (int l = 0; l < kImpulseOrder; ++l)
         z[size_t(l)] = weight * std::sqrt((2.0 * l + 1.0) / (4.0 * kPiD));
     return z;
+}
+
+ZhVector point_direct_zh(const HomogeneousMedium& m, double d) {
+    return axis_delta_zh(std::exp(-m.sigma_t() * d) / (d * d));
 }
 
 ZhVector point_single_zh(const HomogeneousMedium& m, double d) {
@@ -161,11 +165,7 @@ PhaseResponses point_single_basis(double optical_distance) {
 }
 
 ZhVector directional_direct_zh(const HomogeneousMedium& m, double depth) {
-    ZhVector z{};
-    const double weight = std::exp(-m.sigma_t() * depth);
-    for (int l = 0; l < kImpulseOrder; ++l)
-        z[size_t(l)] = weight * std::sqrt((2.0 * l + 1.0) / (4.0 * kPiD));
-    return z;
+    return axis_delta_zh(std::exp(-m.sigma_t() * depth));
 }
 
 ZhVector directional_single_zh(const HomogeneousMedium& m, double s) {

@@ -129,16 +129,7 @@ ImpulseTables ImpulseTables::load(const fs::path& path) {
 }
 
 fs::path ImpulseTables::default_path(int bounces) {
-    fs::path dir;
-    if (const char* d = std::getenv("FREQLAB_CACHE_DIR"); d && *d)
-        dir = d;
-    else if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x)
-        dir = fs::path(x) / "freqlab";
-    else if (const char* home = std::getenv("HOME"); home && *home)
-        dir = fs::path(home) / ".cache" / "freqlab";
-    else
-        dir = fs::temp_directory_path() / "freqlab-cache";
-    return dir / "tables" /
+    return cache_directory() / "tables" /
            ("impulse_v" + std::to_string(kFormatVersion) + "_b" + std::to_string(bounces) + ".bin");
 }
 

@@ -1,5 +1,7 @@
 #include "volume/multiple_scatter.h"
 
+#include "math/sh.h"
+
 #include <tbb/parallel_for.h>
 #include <boost/math/quadrature/gauss.hpp>
 
@@ -26,17 +28,6 @@ double catmull_rom(const std::vector<double>& v, double u) {
     return (-0.5 * f3 + f2 - 0.5 * f) * v[size_t(i0)] + (1.5 * f3 - 2.5 * f2 + 1.0) * v[size_t(i)] +
            (-1.5 * f3 + 2.0 * f2 + 0.5 * f) * v[size_t(i) + 1] +
            (0.5 * f3 - 0.5 * f2) * v[size_t(i3)];
-}
-
-double zh_y(int l, double x) {
-    double p0 = 1.0, p1 = x;
-    double p = l == 0 ? 1.0 : x;
-    for (int k = 2; k <= l; ++k) {
-        p = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
-        p0 = p1;
-        p1 = p;
-    }
-    return std::sqrt((2.0 * l + 1.0) / (4.0 * kPiD)) * p;
 }
 
 }  // namespace
@@ -88,8 +79,11 @@ PointMultipleScatter::PointMultipleScatter(int bounces)
                                             fluence(k, r) / (4.0 * kPiD);
                             }
                         const double weight = 2.0 * kPiD * std::sin(theta) * ws[q] * 0.5 * (b - a);
+                        double p[kImpulseOrder];
+                        legendre(kImpulseOrder, mu, p);
                         for (int l = 0; l < kImpulseOrder; ++l)
-                            z[size_t(l)] += weight * radiance * zh_y(l, mu);
+                            z[size_t(l)] += weight * radiance *
+                                            std::sqrt((2.0 * l + 1.0) / (4.0 * kPiD)) * p[l];
                     }
             }
             zh_[size_t(k) + 1][size_t(bin)] = z;
