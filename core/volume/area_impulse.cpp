@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "math/sh.h"
+#include "volume/polar_quadrature.h"
 
 namespace freqlab {
 
@@ -20,45 +21,35 @@ ShVector area_single_sh(const HomogeneousMedium& m, double d, double alpha) {
     const glm::dvec3 n(std::sin(alpha), 0.0, -std::cos(alpha));  // alpha = 0 faces the receiver
     const double sigma_t = m.sigma_t();
     ShVector out{};
-    const auto& xt = gauss<double, 12>::abscissa();
-    const auto& wt = gauss<double, 12>::weights();
     const auto& xr = gauss<double, 48>::abscissa();
     const auto& wr = gauss<double, 48>::weights();
-    const int panels = 40, n_phi = 64;
+    const int n_phi = 64;
     double y[kAreaShCount];
-    for (int p = 0; p < panels; ++p) {
-        const double a = kPiD * std::pow(double(p) / panels, 2.0);
-        const double b = kPiD * std::pow(double(p + 1) / panels, 2.0);
-        for (size_t q = 0; q < xt.size(); ++q)
-            for (double sign : {-1.0, 1.0}) {
-                const double theta = 0.5 * (a + b) + sign * 0.5 * (b - a) * xt[q];
-                const double ct = std::cos(theta), st = std::sin(theta);
-                const double t0 = d * ct, h = d * st;
-                if (h < 1e-300) continue;
-                const double phi_a = std::atan2(-t0, h);
-                const double mid = 0.5 * (phi_a + 0.5 * kPiD), half = 0.5 * (0.5 * kPiD - phi_a);
-                for (int k = 0; k < n_phi; ++k) {
-                    const double azimuth = 2.0 * kPiD * (k + 0.5) / n_phi;
-                    const glm::dvec3 w(st * std::cos(azimuth), st * std::sin(azimuth), ct);
-                    // Equi-angular along the ray: dt / r^2 = dphi / h; times sin(theta) = 1/d.
-                    double radiance_sin = 0.0;
-                    for (size_t e = 0; e < xr.size(); ++e)
-                        for (double s2 : {-1.0, 1.0}) {
-                            const double phi = mid + s2 * half * xr[e];
-                            const double t = t0 + h * std::tan(phi), r = h / std::cos(phi);
-                            const glm::dvec3 u =
-                                (t * w - glm::dvec3(0, 0, d)) / r;  // emitter -> x_t
-                            const double emission = std::max(glm::dot(n, u), 0.0);
-                            if (emission <= 0) continue;
-                            radiance_sin += wr[e] * half / d * std::exp(-sigma_t * (t + r)) *
-                                            m.sigma_s * hg_phase(m.g, -glm::dot(u, w)) * emission;
-                        }
-                    sh_eval(kImpulseOrder, w, y);
-                    const double weight = wt[q] * 0.5 * (b - a) * 2.0 * kPiD / n_phi;
-                    for (int i = 0; i < kAreaShCount; ++i)
-                        out[size_t(i)] += weight * radiance_sin * y[i];
+    for (const PolarNode& node : graded_polar_nodes()) {
+        const double ct = std::cos(node.theta), st = std::sin(node.theta);
+        const double t0 = d * ct, h = d * st;
+        if (h < 1e-300) continue;
+        const double phi_a = std::atan2(-t0, h);
+        const double mid = 0.5 * (phi_a + 0.5 * kPiD), half = 0.5 * (0.5 * kPiD - phi_a);
+        for (int k = 0; k < n_phi; ++k) {
+            const double azimuth = 2.0 * kPiD * (k + 0.5) / n_phi;
+            const glm::dvec3 w(st * std::cos(azimuth), st * std::sin(azimuth), ct);
+            // Equi-angular along the ray: dt / r^2 = dphi / h; times sin(theta) = 1/d.
+            double radiance_sin = 0.0;
+            for (size_t e = 0; e < xr.size(); ++e)
+                for (double s2 : {-1.0, 1.0}) {
+                    const double phi = mid + s2 * half * xr[e];
+                    const double t = t0 + h * std::tan(phi), r = h / std::cos(phi);
+                    const glm::dvec3 u = (t * w - glm::dvec3(0, 0, d)) / r;  // emitter -> x_t
+                    const double emission = std::max(glm::dot(n, u), 0.0);
+                    if (emission <= 0) continue;
+                    radiance_sin += wr[e] * half / d * std::exp(-sigma_t * (t + r)) * m.sigma_s *
+                                    hg_phase(m.g, -glm::dot(u, w)) * emission;
                 }
-            }
+            sh_eval(kImpulseOrder, w, y);
+            const double weight = node.weight * 2.0 * kPiD / n_phi;
+            for (int i = 0; i < kAreaShCount; ++i) out[size_t(i)] += weight * radiance_sin * y[i];
+        }
     }
     return out;
 }

@@ -1,6 +1,7 @@
 #include "volume/impulse_response.h"
 
 #include "math/sh.h"
+#include "volume/polar_quadrature.h"
 
 #include <tbb/parallel_for.h>
 #include <boost/math/quadrature/gauss.hpp>
@@ -72,27 +73,17 @@ void point_radiance_times_sin(double sigma_s, double sigma_t, double d, double t
 
 template <class Phase>
 void point_single(double sigma_s, double sigma_t, double d, const Phase& phase, ZhVector* out) {
-    using boost::math::quadrature::gauss;
     for (int j = 0; j < Phase::count; ++j) out[j] = ZhVector{};
-    // Panels graded towards theta = 0, where the response to a forward-peaked phase function
-    // and to short distances concentrates.
-    const int panels = 40;
+    // Graded towards theta = 0, where the response to a forward-peaked phase function and to
+    // short distances concentrates (volume/polar_quadrature.h).
     double radiance[Phase::count], basis[kImpulseOrder];
-    const auto& x = gauss<double, 12>::abscissa();
-    const auto& w = gauss<double, 12>::weights();
-    for (int i = 0; i < panels; ++i) {
-        const double a = kPiD * std::pow(double(i) / panels, 2.0);
-        const double b = kPiD * std::pow(double(i + 1) / panels, 2.0);
-        for (size_t k = 0; k < x.size(); ++k)
-            for (double sign : {-1.0, 1.0}) {
-                const double theta = 0.5 * (a + b) + sign * 0.5 * (b - a) * x[k];
-                point_radiance_times_sin(sigma_s, sigma_t, d, theta, phase, radiance);
-                zh_basis_all(std::cos(theta), basis);
-                const double weight = 2.0 * kPiD * w[k] * 0.5 * (b - a);
-                for (int j = 0; j < Phase::count; ++j)
-                    for (int l = 0; l < kImpulseOrder; ++l)
-                        out[j][size_t(l)] += weight * radiance[j] * basis[l];
-            }
+    for (const PolarNode& node : graded_polar_nodes()) {
+        point_radiance_times_sin(sigma_s, sigma_t, d, node.theta, phase, radiance);
+        zh_basis_all(std::cos(node.theta), basis);
+        const double weight = 2.0 * kPiD * node.weight;
+        for (int j = 0; j < Phase::count; ++j)
+            for (int l = 0; l < kImpulseOrder; ++l)
+                out[j][size_t(l)] += weight * radiance[j] * basis[l];
     }
 }
 

@@ -1,6 +1,7 @@
 #include "volume/multiple_scatter.h"
 
 #include "math/sh.h"
+#include "volume/polar_quadrature.h"
 
 #include <tbb/parallel_for.h>
 #include <boost/math/quadrature/gauss.hpp>
@@ -45,46 +46,36 @@ PointMultipleScatter::PointMultipleScatter(int bounces)
     using boost::math::quadrature::gauss;
     for (int i = 0; i < ZhDistanceTable::kBins; ++i)
         fluence_scaled_[0][size_t(i)] = 1.0;  // e^-D / D^2
-    const auto& xs = gauss<double, 12>::abscissa();
-    const auto& ws = gauss<double, 12>::weights();
     const auto& xr = gauss<double, 32>::abscissa();
     const auto& wr = gauss<double, 32>::weights();
     for (int k = 0; k < bounces; ++k) {
         tbb::parallel_for(0, ZhDistanceTable::kBins, [&](int bin) {
             const double D = ZhDistanceTable::distance_of_bin(bin);
             ZhVector z{};
-            // Over theta (from the direction towards the emitter), panels graded towards 0:
-            // the radiance behaves like 1 / sin(theta) there, which the sin(theta) of the
-            // solid angle cancels (in mu it would be an endpoint singularity).
-            const int panels = 40;
-            for (int p = 0; p < panels; ++p) {
-                const double a = kPiD * std::pow(double(p) / panels, 2.0);
-                const double b = kPiD * std::pow(double(p + 1) / panels, 2.0);
-                for (size_t q = 0; q < xs.size(); ++q)
-                    for (double sign : {-1.0, 1.0}) {
-                        const double theta = 0.5 * (a + b) + sign * 0.5 * (b - a) * xs[q];
-                        const double mu = std::cos(theta);
-                        const double t0 = D * mu, h = D * std::sin(theta);
-                        // Along the ray: t = t0 + h tan(phi), dt = h / cos^2(phi) dphi.
-                        const double phi_a = std::atan2(-t0, std::max(h, 1e-300));
-                        const double mid = 0.5 * (phi_a + 0.5 * kPiD),
-                                     half = 0.5 * (0.5 * kPiD - phi_a);
-                        double radiance = 0.0;
-                        for (size_t e = 0; e < xr.size(); ++e)
-                            for (double s2 : {-1.0, 1.0}) {
-                                const double phi = mid + s2 * half * xr[e];
-                                const double c = std::cos(phi);
-                                const double t = t0 + h * std::tan(phi), r = h / c;
-                                radiance += wr[e] * half * h / (c * c) * std::exp(-t) *
-                                            fluence(k, r) / (4.0 * kPiD);
-                            }
-                        const double weight = 2.0 * kPiD * std::sin(theta) * ws[q] * 0.5 * (b - a);
-                        double p[kImpulseOrder];
-                        legendre(kImpulseOrder, mu, p);
-                        for (int l = 0; l < kImpulseOrder; ++l)
-                            z[size_t(l)] += weight * radiance *
-                                            std::sqrt((2.0 * l + 1.0) / (4.0 * kPiD)) * p[l];
+            // Over theta (from the direction towards the emitter), graded towards 0: the
+            // radiance behaves like 1 / sin(theta) there, which the sin(theta) of the solid
+            // angle cancels (in mu it would be an endpoint singularity).
+            for (const PolarNode& node : graded_polar_nodes()) {
+                const double mu = std::cos(node.theta);
+                const double t0 = D * mu, h = D * std::sin(node.theta);
+                // Along the ray: t = t0 + h tan(phi), dt = h / cos^2(phi) dphi.
+                const double phi_a = std::atan2(-t0, std::max(h, 1e-300));
+                const double mid = 0.5 * (phi_a + 0.5 * kPiD), half = 0.5 * (0.5 * kPiD - phi_a);
+                double radiance = 0.0;
+                for (size_t e = 0; e < xr.size(); ++e)
+                    for (double s2 : {-1.0, 1.0}) {
+                        const double phi = mid + s2 * half * xr[e];
+                        const double c = std::cos(phi);
+                        const double t = t0 + h * std::tan(phi), r = h / c;
+                        radiance += wr[e] * half * h / (c * c) * std::exp(-t) * fluence(k, r) /
+                                    (4.0 * kPiD);
                     }
+                const double weight = 2.0 * kPiD * std::sin(node.theta) * node.weight;
+                double p[kImpulseOrder];
+                legendre(kImpulseOrder, mu, p);
+                for (int l = 0; l < kImpulseOrder; ++l)
+                    z[size_t(l)] +=
+                        weight * radiance * std::sqrt((2.0 * l + 1.0) / (4.0 * kPiD)) * p[l];
             }
             zh_[size_t(k) + 1][size_t(bin)] = z;
             // Fluence = integral of the radiance over the sphere = sqrt(4 pi) x the DC.
