@@ -44,7 +44,9 @@ struct TablesQueryArgs {
     std::string emitter = "point";  // point | directional | area
     double distance = 1.0;          // point: to the emitter; directional: to the medium boundary
     double sigma_s = 1.0, sigma_a = 0.0, g = 0.0;
-    std::string bounces = "1";  // all | N
+    std::string bounces = "1";         // all | N
+    double shift = 0.0;                // area: sin of the emitter normal's angle to the receiver
+    std::string variant = "infinite";  // infinite | surface
 };
 int run_tables_query(const TablesQueryArgs& args);
 // Generates (or reuses) the table file, then verifies it against direct computation.

@@ -124,6 +124,11 @@ int main(int argc, char** argv) {
     tables->add_option("--sigma-s", tq.sigma_s, "scattering coefficient");
     tables->add_option("--sigma-a", tq.sigma_a, "absorption coefficient");
     tables->add_option("--g", tq.g, "Henyey-Greenstein anisotropy, |g| <= 0.6");
+    tables->add_option("--shift", tq.shift,
+                       "area emitters: sin of the angle between the emitter normal and the "
+                       "direction to the receiver, in [0, 1]");
+    tables->add_option("--variant", tq.variant,
+                       "infinite (pure infinite medium) or surface (back-scatter shift 0.125)");
     tables->add_option("--bounces", tq.bounces,
                        "1, N or all (multiple scattering: point emitters)");
     std::string tables_out;

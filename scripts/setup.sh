@@ -6,7 +6,7 @@ cd "$(dirname "$0")/.."
 
 packages=(
   build-essential cmake pkg-config
-  libembree-dev libopenexr-dev libopenimageio-dev libglm-dev libglfw3-dev libosmesa6-dev
+  libembree-dev libopenexr-dev libimath-dev libopenimageio-dev libglm-dev libglfw3-dev libosmesa6-dev
   libimgui-dev libfftw3-dev libtbb-dev nlohmann-json3-dev libassimp-dev libgtest-dev
   libbenchmark-dev libboost-math-dev libcli11-dev python3-glad xvfb xauth
   blender-data assimp-testmodels fonts-dejavu-core

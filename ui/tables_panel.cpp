@@ -9,6 +9,7 @@
 #include "base/job.h"
 #include "image/colormap.h"
 #include "math/sh.h"
+#include "volume/impulse_query.h"
 #include "volume/impulse_tables.h"
 
 namespace freqlab::ui {
@@ -21,21 +22,21 @@ namespace {
 
 constexpr int kTableBounces = 30;
 
-ZhVector response(const TablesPanelState& s, double d) {
-    const HomogeneousMedium m{s.sigma_s, s.sigma_a, s.g};
-    const bool point = s.emitter == 0;
-    // In-scattered light only: the direct term is a delta towards the emitter (closed form).
+// In-scattered light only: the direct term is a delta towards the emitter (closed form). For
+// area emitters the single-scattered lobe's axis is tilted; the plots show it about its own axis.
+ZhVector response(const TablesPanelState& s, double d, double* tilt = nullptr) {
+    ImpulseQuery q;
+    q.emitter = EmitterKind(s.emitter);
+    q.distance = d;
+    q.shift = s.shift;
+    q.medium = HomogeneousMedium{s.sigma_s, s.sigma_a, s.g};
+    q.last_bounce = s.bounces;
+    q.variant = s.surface_variant ? TableVariant::Surface : TableVariant::Infinite;
+    const ImpulseResponse r = query_impulse(*s.tables, q);
+    if (tilt) *tilt = r.axis_tilt;
     ZhVector z{};
-    const ZhVector single =
-        (point ? s.tables->point_single() : s.tables->directional_single()).single(m, d);
-    ZhVector multiple{};
-    if (point && s.bounces > 1) {
-        HomogeneousMedium similar = m;  // multiple scattering is isotropic, by similarity
-        similar.sigma_s = m.sigma_s * (1.0 - m.g);
-        similar.g = 0.0;
-        multiple = s.tables->point_multiple().bounces_in(similar, d, 2, s.bounces);
-    }
-    for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += single[size_t(l)] + multiple[size_t(l)];
+    for (int l = 0; l < kImpulseOrder; ++l)
+        z[size_t(l)] = r.single[size_t(l)] + r.multiple[size_t(l)];
     return z;
 }
 
@@ -66,11 +67,13 @@ void draw_tables_panel(TablesPanelState& s) {
             return;
         }
     }
-    ImGui::Combo("emitter", &s.emitter, "point\0directional\0");
+    ImGui::Combo("emitter", &s.emitter, "point\0directional\0area\0");
+    if (s.emitter == 2) ImGui::SliderFloat("shift sin(a)", &s.shift, 0.0f, 1.0f, "%.2f");
+    ImGui::Checkbox("surface variant (back-scatter shift)", &s.surface_variant);
     ImGui::SliderFloat("sigma_s", &s.sigma_s, 0.01f, 10.0f, "%.3g", ImGuiSliderFlags_Logarithmic);
     ImGui::SliderFloat("sigma_a", &s.sigma_a, 0.0f, 5.0f, "%.3g");
     ImGui::SliderFloat("g", &s.g, -0.6f, 0.6f, "%.2f");
-    if (s.emitter == 0) ImGui::SliderInt("bounces", &s.bounces, 1, kTableBounces);
+    ImGui::SliderInt("bounces", &s.bounces, 1, kTableBounces);
     ImGui::SliderFloat("lobe at d", &s.lobe_distance, 0.01f, 10.0f, "%.3g",
                        ImGuiSliderFlags_Logarithmic);
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("tables: %s", s.path.c_str());
@@ -101,7 +104,8 @@ void draw_tables_panel(TablesPanelState& s) {
     ImGui::Dummy(ImVec2(w, h + 4));
 
     // Polar cross-section of the in-scattered response at one distance; emitter to the right.
-    const ZhVector z = response(s, s.lobe_distance);
+    double tilt = 0.0;
+    const ZhVector z = response(s, s.lobe_distance, &tilt);
     const float size = std::min(w, 160.0f);
     o = ImGui::GetCursorScreenPos();
     const ImVec2 c(o.x + size / 2, o.y + size / 2);
@@ -115,15 +119,20 @@ void draw_tables_panel(TablesPanelState& s) {
     ImVec2 prev;
     for (int i = -180; i <= 180; ++i) {
         const double theta = M_PI * i / 180.0, rr = peak > 0 ? r[size_t(std::abs(i))] / peak : 0.0;
-        const ImVec2 p(c.x + float(0.45 * size * rr * std::cos(theta)),
-                       c.y - float(0.45 * size * rr * std::sin(theta)));
+        // Area lobes are drawn about their tilted axis (the emitter's normal leans upwards).
+        const ImVec2 p(c.x + float(0.45 * size * rr * std::cos(theta + tilt)),
+                       c.y - float(0.45 * size * rr * std::sin(theta + tilt)));
         if (i > -180) dl->AddLine(prev, p, IM_COL32(250, 200, 60, 255), 1.5f);
         prev = p;
     }
     dl->AddLine(c, ImVec2(o.x + size - 4, c.y), IM_COL32(120, 120, 120, 255));
     char label[64];
-    std::snprintf(label, sizeof label, "in-scattered lobe, d = %.3g (DC %.3g)", s.lobe_distance,
-                  z[0]);
+    if (s.emitter == 2)
+        std::snprintf(label, sizeof label, "lobe, d = %.3g (DC %.3g), axis tilt %.1f deg",
+                      s.lobe_distance, z[0], tilt * 180.0 / M_PI);
+    else
+        std::snprintf(label, sizeof label, "in-scattered lobe, d = %.3g (DC %.3g)", s.lobe_distance,
+                      z[0]);
     dl->AddText(ImVec2(o.x + 4, o.y + 2), IM_COL32(200, 200, 200, 255), label);
     ImGui::Dummy(ImVec2(size, size + 4));
 }

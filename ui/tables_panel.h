@@ -18,8 +18,9 @@ struct TablesPanelState {
     std::mutex mutex;
     std::shared_ptr<ImpulseTables> tables;
     std::string path;
-    int emitter = 0;  // 0 point, 1 directional
-    float sigma_s = 1.0f, sigma_a = 0.0f, g = 0.0f, lobe_distance = 1.0f;
+    int emitter = 0;  // EmitterKind: 0 point, 1 directional, 2 area
+    float sigma_s = 1.0f, sigma_a = 0.0f, g = 0.0f, lobe_distance = 1.0f, shift = 0.5f;
+    bool surface_variant = false;
     int bounces = 1;
     bool open = false;  // panel opened by default
 };

@@ -72,12 +72,13 @@ void point_radiance_times_sin(double sigma_s, double sigma_t, double d, double t
 }
 
 template <class Phase>
-void point_single(double sigma_s, double sigma_t, double d, const Phase& phase, ZhVector* out) {
+void point_single(double sigma_s, double sigma_t, double d, const Phase& phase, ZhVector* out,
+                  PolarRule rule = PolarRule::Fine) {
     for (int j = 0; j < Phase::count; ++j) out[j] = ZhVector{};
     // Graded towards theta = 0, where the response to a forward-peaked phase function and to
     // short distances concentrates (volume/polar_quadrature.h).
     double radiance[Phase::count], basis[kImpulseOrder];
-    for (const PolarNode& node : graded_polar_nodes()) {
+    for (const PolarNode& node : graded_polar_nodes(rule)) {
         point_radiance_times_sin(sigma_s, sigma_t, d, node.theta, phase, radiance);
         zh_basis_all(std::cos(node.theta), basis);
         const double weight = 2.0 * kPiD * node.weight;
@@ -89,44 +90,27 @@ void point_single(double sigma_s, double sigma_t, double d, const Phase& phase, 
 
 // Directional emitter: the ray integral in closed form (see the header), per phase term.
 template <class Phase>
-void directional_single(double sigma_s, double sigma_t, double s, const Phase& phase,
-                        ZhVector* out) {
-    using boost::math::quadrature::gauss;
+void directional_single(double sigma_s, double sigma_t, double s, const Phase& phase, ZhVector* out,
+                        bool coarse = false) {
     for (int j = 0; j < Phase::count; ++j) out[j] = ZhVector{};
     double terms[Phase::count];
-    const auto& x = gauss<double, 12>::abscissa();
-    const auto& w = gauss<double, 12>::weights();
-    // Panels split at mu = 0 (where t_max becomes infinite) and graded towards mu = 1.
-    const int panels = 24;
-    for (int half = 0; half < 2; ++half)
-        for (int i = 0; i < panels; ++i) {
-            double a, b;
-            if (half == 0)
-                a = -1.0 + double(i) / panels, b = -1.0 + double(i + 1) / panels;
-            else
-                a = 1.0 - std::pow(1.0 - double(i) / panels, 2.0),
-                b = 1.0 - std::pow(1.0 - double(i + 1) / panels, 2.0);
-            for (size_t k = 0; k < x.size(); ++k)
-                for (double sign : {-1.0, 1.0}) {
-                    const double mu = 0.5 * (a + b) + sign * 0.5 * (b - a) * x[k];
-                    const double kk = sigma_t * (1.0 - mu);
-                    double path;  // int_0^t_max e^{-sigma_t t (1 - mu)} dt
-                    if (mu > 0) {
-                        const double t_max = s / mu;
-                        path = kk * t_max < 1e-8 ? t_max : -std::expm1(-kk * t_max) / kk;
-                    } else {
-                        path = 1.0 / kk;
-                    }
-                    const double common =
-                        2.0 * kPiD * sigma_s * std::exp(-sigma_t * s) * path * w[k] * 0.5 * (b - a);
-                    phase.eval(mu, terms);
-                    double y[kImpulseOrder];
-                    zh_basis_all(mu, y);
-                    for (int l = 0; l < kImpulseOrder; ++l)
-                        for (int j = 0; j < Phase::count; ++j)
-                            out[j][size_t(l)] += common * terms[j] * y[l];
-                }
+    for (const MuNode& node : directional_mu_nodes(sigma_t * s, coarse ? 12 : 24)) {
+        const double mu = node.mu;
+        const double kk = sigma_t * (1.0 - mu);
+        double path;  // int_0^t_max e^{-sigma_t t (1 - mu)} dt
+        if (mu > 0) {
+            const double t_max = s / mu;
+            path = kk * t_max < 1e-8 ? t_max : -std::expm1(-kk * t_max) / kk;
+        } else {
+            path = 1.0 / kk;
         }
+        const double common = 2.0 * kPiD * sigma_s * std::exp(-sigma_t * s) * path * node.weight;
+        phase.eval(mu, terms);
+        double y[kImpulseOrder];
+        zh_basis_all(mu, y);
+        for (int l = 0; l < kImpulseOrder; ++l)
+            for (int j = 0; j < Phase::count; ++j) out[j][size_t(l)] += common * terms[j] * y[l];
+    }
 }
 
 }  // namespace
@@ -149,9 +133,43 @@ ZhVector point_single_zh(const HomogeneousMedium& m, double d) {
     return z;
 }
 
-PhaseResponses point_single_basis(double optical_distance) {
+double g_node(int j) {
+    return kGRange * std::cos((2.0 * j + 1.0) * kPiD / (2.0 * kGNodes));
+}
+
+namespace {
+
+// Nodes and barycentric weights (Chebyshev, first kind: (-1)^j sin(theta_j)), computed once.
+struct GNodeConstants {
+    double node[kGNodes], weight[kGNodes];
+    GNodeConstants() {
+        for (int j = 0; j < kGNodes; ++j) {
+            node[j] = g_node(j);
+            weight[j] = (j % 2 ? -1.0 : 1.0) * std::sin((2.0 * j + 1.0) * kPiD / (2.0 * kGNodes));
+        }
+    }
+};
+
+}  // namespace
+
+void g_node_weights(double g, double* weights) {
+    static const GNodeConstants c;
+    double sum = 0.0;
+    for (int j = 0; j < kGNodes; ++j) {
+        const double diff = g - c.node[j];
+        if (diff == 0.0) {
+            for (int i = 0; i < kGNodes; ++i) weights[i] = i == j ? 1.0 : 0.0;
+            return;
+        }
+        weights[j] = c.weight[j] / diff;
+        sum += weights[j];
+    }
+    for (int j = 0; j < kGNodes; ++j) weights[j] /= sum;
+}
+
+PhaseResponses point_single_basis(double optical_distance, PolarRule rule) {
     PhaseResponses r;
-    point_single(1.0, 1.0, optical_distance, LegendrePhaseBasis{}, r.data());
+    point_single(1.0, 1.0, optical_distance, LegendrePhaseBasis{}, r.data(), rule);
     return r;
 }
 
@@ -165,9 +183,9 @@ ZhVector directional_single_zh(const HomogeneousMedium& m, double s) {
     return z;
 }
 
-PhaseResponses directional_single_basis(double optical_distance) {
+PhaseResponses directional_single_basis(double optical_distance, bool coarse) {
     PhaseResponses r;
-    directional_single(1.0, 1.0, optical_distance, LegendrePhaseBasis{}, r.data());
+    directional_single(1.0, 1.0, optical_distance, LegendrePhaseBasis{}, r.data(), coarse);
     return r;
 }
 
@@ -233,12 +251,21 @@ SingleScatterTable::SingleScatterTable(Emitter emitter) : emitter_(emitter) {
     const ZhDistanceTable::Trend trend = emitter == Emitter::Point
                                              ? ZhDistanceTable::Trend::PointLike
                                              : ZhDistanceTable::Trend::DirectionalLike;
-    // One quadrature pass per distance gives every phase term's response.
+    // One quadrature pass per distance gives every phase term's response; a coarse pass beside
+    // it gives the entry's error estimate.
     std::vector<PhaseResponses> responses(ZhDistanceTable::kBins);
+    error_.assign(ZhDistanceTable::kBins, 0.0);
     tbb::parallel_for(0, ZhDistanceTable::kBins, [&](int i) {
         const double D = ZhDistanceTable::distance_of_bin(i);
-        responses[size_t(i)] =
-            emitter == Emitter::Point ? point_single_basis(D) : directional_single_basis(D);
+        const bool point = emitter == Emitter::Point;
+        responses[size_t(i)] = point ? point_single_basis(D) : directional_single_basis(D);
+        const PhaseResponses coarse =
+            point ? point_single_basis(D, PolarRule::Coarse) : directional_single_basis(D, true);
+        for (int j = 0; j < kPhaseTerms; ++j)
+            for (int l = 0; l < kImpulseOrder; ++l)
+                error_[size_t(i)] = std::max(error_[size_t(i)],
+                                             std::fabs(responses[size_t(i)][size_t(j)][size_t(l)] -
+                                                       coarse[size_t(j)][size_t(l)]));
     });
     terms_.reserve(kPhaseTerms);
     for (int j = 0; j < kPhaseTerms; ++j) {
@@ -251,8 +278,9 @@ SingleScatterTable::SingleScatterTable(Emitter emitter) : emitter_(emitter) {
 }
 
 SingleScatterTable::SingleScatterTable(Emitter emitter,
-                                       const std::vector<std::vector<ZhVector>>& terms)
-    : emitter_(emitter) {
+                                       const std::vector<std::vector<ZhVector>>& terms,
+                                       std::vector<double> error)
+    : emitter_(emitter), error_(std::move(error)) {
     const ZhDistanceTable::Trend trend = emitter == Emitter::Point
                                              ? ZhDistanceTable::Trend::PointLike
                                              : ZhDistanceTable::Trend::DirectionalLike;
@@ -267,6 +295,14 @@ void SingleScatterTable::pack() {
         for (size_t i = 0; i < nb; ++i)
             for (size_t l = 0; l < no; ++l)
                 packed_[(i * nt + j) * no + l] = terms_[j].scaled()[i][l];
+}
+
+double SingleScatterTable::worst_relative_error() const {
+    const std::vector<ZhVector> iso = terms_[0].canonical();  // b_0: the isotropic phase
+    double worst = 0.0;
+    for (size_t i = 0; i < error_.size(); ++i)
+        worst = std::max(worst, error_[i] / std::fabs(iso[i][0]));
+    return worst;
 }
 
 std::vector<std::vector<ZhVector>> SingleScatterTable::canonical_terms() const {

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "volume/medium.h"
+#include "volume/polar_quadrature.h"
 
 namespace freqlab {
 
@@ -51,8 +52,20 @@ ZhVector directional_single_zh(const HomogeneousMedium& medium, double depth);
 // at g = -0.3, 0.2, 0.45 (closing note of the session that wrote this).
 constexpr int kPhaseTerms = 32;
 using PhaseResponses = std::array<ZhVector, kPhaseTerms>;
-PhaseResponses point_single_basis(double optical_distance);
-PhaseResponses directional_single_basis(double optical_distance);
+PhaseResponses point_single_basis(double optical_distance, PolarRule rule = PolarRule::Fine);
+PhaseResponses directional_single_basis(double optical_distance, bool coarse = false);
+
+// Chebyshev nodes in g for tables where 32 basis terms would not fit (the area tables): as a
+// function of g the response is analytic inside |g| < 1 (HG's singularity, 1 + g^2 - 2 g c = 0,
+// has |g| = 1), so polynomial interpolation at kGNodes Chebyshev nodes of [-kGRange, kGRange]
+// converges like 3^-kGNodes. Measured: enough for point-like responses (0.5 % at g = -0.3, 0.2,
+// 0.5), not for the directional one, whose high orders carry g^l-like factors (1 % at l = 9, 10).
+constexpr int kGNodes = 9;
+constexpr double kGRange = 0.6;
+double g_node(int j);  // kGRange cos((2j + 1) pi / (2 kGNodes)); j = kGNodes / 2 is g = 0
+// Barycentric interpolation weights at g (they sum to 1).
+void g_node_weights(double g, double* weights);
+using GNodeResponses = std::array<ZhVector, kGNodes>;
 
 // ZH vectors over optical distances D in [kMinD, kMaxD], 256 log-spaced bins, Catmull-Rom
 // interpolated in log D after removing the e^{-D} (and, for point emitters, 1/D) trends.
@@ -89,9 +102,14 @@ class SingleScatterTable {
   public:
     enum class Emitter { Point, Directional };
     explicit SingleScatterTable(Emitter emitter);  // tabulates (~0.3 s on 2 cores)
-    // From saved values: terms[k][bin] is the canonical response to phase basis term k.
-    SingleScatterTable(Emitter emitter, const std::vector<std::vector<ZhVector>>& terms);
+    // From saved values: terms[k][bin] is the canonical response to phase basis term k; error[bin]
+    // the entry's estimated quadrature error (max over terms and orders, canonical units).
+    SingleScatterTable(Emitter emitter, const std::vector<std::vector<ZhVector>>& terms,
+                       std::vector<double> error);
     std::vector<std::vector<ZhVector>> canonical_terms() const;
+    const std::vector<double>& error() const { return error_; }
+    // The largest estimated error relative to the entry's isotropic DC.
+    double worst_relative_error() const;
     // Single-scattered ZH at `distance` (point: to the emitter; directional: to the medium's
     // boundary) in `medium`.
     ZhVector single(const HomogeneousMedium& medium, double distance) const;
@@ -101,6 +119,7 @@ class SingleScatterTable {
     Emitter emitter_;
     std::vector<ZhDistanceTable> terms_;  // one per phase basis term
     std::vector<double> packed_;          // [bin][term][l] scaled values: one query reads 4 blocks
+    std::vector<double> error_;           // [bin]
 };
 
 }  // namespace freqlab

@@ -1,12 +1,16 @@
 // All of method B's impulse-response tables in one versioned file: tabulated once (canonical
 // medium), cached on disk, verified on load (parameters and an FNV-1a checksum of the payload).
 //
-// | part                         | size                                    |
-// |------------------------------|-----------------------------------------|
-// | point single scattering      | kPhaseTerms x kBins x kImpulseOrder      |
-// | directional single scatter.  | kPhaseTerms x kBins x kImpulseOrder      |
-// | point multiple scattering    | bounces x kBins x (kImpulseOrder + 1)    |
-// Stored as float32 (the tables' own error is ~1e-4; float rounding is 6e-8).
+// | part                         | size (floats)                                          |
+// |------------------------------|--------------------------------------------------------|
+// | point single scattering      | kPhaseTerms x kBins x kImpulseOrder + kBins error est. |
+// | directional single scatter.  | the same                                               |
+// | area single scattering       | kBins x kShiftBins x (tilt, error estimate) and, as     |
+// |                              | half floats, kBins x kShiftBins x kGNodes x kImpulseOrder|
+// | point multiple scattering    | bounces x kBins x kImpulseOrder + (bounces+1) x kBins  |
+// | directional multiple scatter.| bounces x kBins x kImpulseOrder                        |
+// Stored as float32 (the tables' own error is ~1e-4; float rounding is 6e-8) except the area
+// responses (half floats, see impulse_tables.cpp): 1.9 MB at 30 bounces.
 #pragma once
 
 #include <filesystem>
@@ -14,14 +18,16 @@
 #include <string>
 
 #include "base/job.h"
+#include "volume/area_tables.h"
 #include "volume/impulse_response.h"
 #include "volume/multiple_scatter.h"
+#include "volume/slab_multiple_scatter.h"
 
 namespace freqlab {
 
 class ImpulseTables {
   public:
-    static constexpr int kFormatVersion = 1;
+    static constexpr int kFormatVersion = 2;
 
     static ImpulseTables build(int bounces, Progress* progress = nullptr);
     void save(const std::filesystem::path& path) const;            // atomic
@@ -32,11 +38,16 @@ class ImpulseTables {
 
     const SingleScatterTable& point_single() const { return *point_single_; }
     const SingleScatterTable& directional_single() const { return *directional_single_; }
+    const AreaSingleScatterTable& area_single() const { return *area_single_; }
     const PointMultipleScatter& point_multiple() const { return *point_multiple_; }
+    const SlabMultipleScatter& directional_multiple() const { return *directional_multiple_; }
+    int bounces() const { return point_multiple_->bounces(); }
 
   private:
     std::shared_ptr<SingleScatterTable> point_single_, directional_single_;
+    std::shared_ptr<AreaSingleScatterTable> area_single_;
     std::shared_ptr<PointMultipleScatter> point_multiple_;
+    std::shared_ptr<SlabMultipleScatter> directional_multiple_;
 };
 
 }  // namespace freqlab

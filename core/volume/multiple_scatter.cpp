@@ -87,11 +87,14 @@ PointMultipleScatter::PointMultipleScatter(int bounces)
 }
 
 void PointMultipleScatter::scale() {
-    zh_scaled_ = zh_;
-    for (auto& row : zh_scaled_)
-        for (int i = 0; i < ZhDistanceTable::kBins; ++i) {
-            const double D = ZhDistanceTable::distance_of_bin(i);
-            for (double& v : row[size_t(i)]) v *= D * D * std::exp(D);
+    // [bin][k][l] of zh x D^2 e^D: one query reads 4 contiguous blocks for all its bounces.
+    const size_t nk = zh_.size(), nb = ZhDistanceTable::kBins, no = kImpulseOrder;
+    packed_.assign(nb * nk * no, 0.0);
+    for (size_t k = 1; k < nk; ++k)
+        for (size_t i = 0; i < nb; ++i) {
+            const double D = ZhDistanceTable::distance_of_bin(int(i));
+            for (size_t l = 0; l < no; ++l)
+                packed_[(i * nk + k) * no + l] = zh_[k][i][l] * D * D * std::exp(D);
         }
 }
 
@@ -103,9 +106,10 @@ ZhVector PointMultipleScatter::canonical(int k, double D) const {
         ZhDistanceTable::stencil(ZhDistanceTable::Trend::PointLike, D);
     if (!st.valid) return z;
     const double trend = std::exp(-D) / (D * D);
+    const size_t nk = zh_.size();
     for (int j = 0; j < 4; ++j) {
-        const ZhVector& row = zh_scaled_[size_t(k)][size_t(st.bin[j])];
-        for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += st.weight[j] * row[size_t(l)];
+        const double* row = &packed_[(size_t(st.bin[j]) * nk + size_t(k)) * kImpulseOrder];
+        for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += st.weight[j] * row[l];
     }
     for (double& v : z) v *= trend;
     return z;
@@ -115,12 +119,23 @@ ZhVector PointMultipleScatter::bounces_in(const HomogeneousMedium& m, double dis
                                           int last) const {
     ZhVector z{};
     const double c = m.sigma_s / m.sigma_t(), D = m.sigma_t() * distance;
-    double ck = std::pow(c, first);
-    for (int k = first; k <= last; ++k, ck *= c) {
-        const ZhVector b = canonical(k, D);
-        for (int l = 0; l < kImpulseOrder; ++l)
-            z[size_t(l)] += m.sigma_t() * m.sigma_t() * ck * b[size_t(l)];
+    const ZhDistanceTable::Stencil st =
+        ZhDistanceTable::stencil(ZhDistanceTable::Trend::PointLike, D);
+    first = std::max(first, 1);
+    last = std::min(last, bounces());
+    if (!st.valid || first > last) return z;
+    // One stencil for every bounce; the albedo weights c^k fold into the bin weights.
+    const size_t nk = zh_.size();
+    const double first_weight = std::pow(c, first);
+    for (int j = 0; j < 4; ++j) {
+        double ck = first_weight * st.weight[j];
+        const double* row = &packed_[(size_t(st.bin[j]) * nk + size_t(first)) * kImpulseOrder];
+        for (int k = first; k <= last; ++k, ck *= c, row += kImpulseOrder)
+            for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += ck * row[l];
     }
+    // Trend e^-D / D^2 (the stencil's is e^-D / D) and the sigma_t^2 of the remap.
+    const double factor = m.sigma_t() * m.sigma_t() * std::exp(-D) / (D * D);
+    for (double& v : z) v *= factor;
     return z;
 }
 

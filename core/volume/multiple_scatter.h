@@ -48,7 +48,7 @@ class PointMultipleScatter {
   private:
     std::vector<std::vector<double>> fluence_scaled_;  // [k][bin]: phi_k(D) D^2 e^D
     std::vector<std::vector<ZhVector>> zh_;            // [k][bin] (k = 0 unused)
-    std::vector<std::vector<ZhVector>> zh_scaled_;     // zh_ x D^2 e^D: what is interpolated
+    std::vector<double> packed_;                       // [bin][k][l] zh_ x D^2 e^D
     void scale();
 };
 

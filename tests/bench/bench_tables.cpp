@@ -2,6 +2,7 @@
 //   ./build/tests/freqlab_benchmarks --benchmark_filter=TableQuery
 #include <benchmark/benchmark.h>
 
+#include "volume/impulse_query.h"
 #include "volume/impulse_tables.h"
 
 using namespace freqlab;
@@ -33,7 +34,47 @@ void BM_TableQuery_PointMultiple10(benchmark::State& state) {
     }
 }
 
+void BM_TableQuery_AreaSingle(benchmark::State& state) {
+    const ImpulseTables& t = tables();
+    HomogeneousMedium m{0.7, 0.05, 0.3};
+    double d = 0.01, shift = 0.0;
+    for (auto _ : state) {
+        d = d > 5.0 ? 0.01 : d * 1.01;
+        shift = shift > 0.99 ? 0.0 : shift + 0.013;
+        benchmark::DoNotOptimize(t.area_single().single(m, d, shift));
+    }
+}
+
+void BM_TableQuery_DirectionalMultiple10(benchmark::State& state) {
+    const ImpulseTables& t = tables();
+    HomogeneousMedium m{0.7, 0.05, 0.0};
+    double d = 0.01;
+    for (auto _ : state) {
+        d = d > 5.0 ? 0.01 : d * 1.01;
+        benchmark::DoNotOptimize(t.directional_multiple().bounces_in(m, d, 2, 10));
+    }
+}
+
+// The whole query as the bakers call it: direct + single + bounces 2..30, area emitter.
+void BM_TableQuery_AreaAllBounces(benchmark::State& state) {
+    const ImpulseTables& t = tables();
+    ImpulseQuery q;
+    q.emitter = EmitterKind::Area;
+    q.medium = {0.7, 0.05, 0.3};
+    q.last_bounce = 30;
+    double d = 0.01;
+    for (auto _ : state) {
+        d = d > 5.0 ? 0.01 : d * 1.01;
+        q.distance = d;
+        q.shift = 0.4;
+        benchmark::DoNotOptimize(query_impulse(t, q));
+    }
+}
+
 }  // namespace
 
+BENCHMARK(BM_TableQuery_AreaSingle);
+BENCHMARK(BM_TableQuery_DirectionalMultiple10);
+BENCHMARK(BM_TableQuery_AreaAllBounces);
 BENCHMARK(BM_TableQuery_PointSingle);
 BENCHMARK(BM_TableQuery_PointMultiple10);

@@ -1,0 +1,163 @@
+#include "volume/slab_multiple_scatter.h"
+
+#include <tbb/parallel_for.h>
+#include <boost/math/quadrature/gauss.hpp>
+
+#include <cmath>
+
+#include "math/sh.h"
+#include "volume/polar_quadrature.h"
+
+namespace freqlab {
+
+namespace {
+
+constexpr double kPiD = 3.14159265358979323846;
+
+double grid_u(double z) {
+    return std::log(z / ZhDistanceTable::kMinD) /
+           std::log(ZhDistanceTable::kMaxD / ZhDistanceTable::kMinD) * (ZhDistanceTable::kBins - 1);
+}
+
+template <class Get>
+double catmull_rom(Get v, int n, double u) {
+    u = std::clamp(u, 0.0, double(n - 1));
+    const int i = std::min(int(u), n - 2);
+    const double f = u - i, f2 = f * f, f3 = f2 * f;
+    const int i0 = std::max(i - 1, 0), i3 = std::min(i + 2, n - 1);
+    return (-0.5 * f3 + f2 - 0.5 * f) * v(i0) + (1.5 * f3 - 2.5 * f2 + 1.0) * v(i) +
+           (-1.5 * f3 + 2.0 * f2 + 0.5 * f) * v(i + 1) + (0.5 * f3 - 0.5 * f2) * v(i3);
+}
+
+}  // namespace
+
+double SlabMultipleScatter::fluence(int k, double z) const {
+    if (k == 0) return std::exp(-std::max(z, 0.0));
+    const std::vector<double>& lf = log_fluence_[size_t(k)];
+    const int n = ZhDistanceTable::kBins;
+    if (z >= ZhDistanceTable::kMaxD) {
+        const double z1 = ZhDistanceTable::distance_of_bin(n - 2), z2 = ZhDistanceTable::kMaxD;
+        const double slope = (lf[size_t(n) - 1] - lf[size_t(n) - 2]) / (z2 - z1);
+        return std::exp(lf[size_t(n) - 1] + slope * (z - z2));
+    }
+    const double u = grid_u(std::max(z, ZhDistanceTable::kMinD));
+    return std::exp(catmull_rom([&](int i) { return lf[size_t(i)]; }, n, u));
+}
+
+SlabMultipleScatter::SlabMultipleScatter(int bounces)
+    : zh_(size_t(bounces) + 1, std::vector<ZhVector>(ZhDistanceTable::kBins)),
+      log_fluence_(size_t(bounces) + 1, std::vector<double>(ZhDistanceTable::kBins)) {
+    using boost::math::quadrature::gauss;
+    const auto& xt = gauss<double, 16>::abscissa();
+    const auto& wt = gauss<double, 16>::weights();
+    for (int i = 0; i < ZhDistanceTable::kBins; ++i)
+        log_fluence_[0][size_t(i)] = -ZhDistanceTable::distance_of_bin(i);
+    for (int k = 0; k < bounces; ++k) {
+        tbb::parallel_for(0, ZhDistanceTable::kBins, [&](int bin) {
+            const double s = ZhDistanceTable::distance_of_bin(bin);
+            ZhVector z{};
+            double p[kImpulseOrder];
+            for (const auto& [mu, wmu] : directional_mu_nodes(s, 12)) {
+                // u = 1 - e^{-(1 - mu) t}: e^{-t} dt = e^{-mu t} du / (1 - mu), and since
+                // phi_k(z) ~ e^{-z} x (slowly varying), e^{-mu t} phi_k(s - t mu) stays bounded
+                // and smooth in u whichever way the ray goes.
+                const double a_rate = 1.0 - mu;
+                const double u_max = mu > 0 ? -std::expm1(-a_rate * s / mu) : 1.0;
+                double radiance = 0.0;
+                const double edges[5] = {0.0, 0.5 * u_max, 0.8 * u_max, 0.95 * u_max, u_max};
+                for (int pnl = 0; pnl < 4; ++pnl) {
+                    const double a = edges[pnl], b = edges[pnl + 1];
+                    for (size_t e = 0; e < xt.size(); ++e)
+                        for (double sign : {-1.0, 1.0}) {
+                            const double u = 0.5 * (a + b) + sign * 0.5 * (b - a) * xt[e];
+                            const double t = -std::log1p(-u) / a_rate;
+                            radiance +=
+                                wt[e] * 0.5 * (b - a) * std::exp(-mu * t) * fluence(k, s - t * mu);
+                        }
+                }
+                radiance /= 4.0 * kPiD * a_rate;
+                legendre(kImpulseOrder, mu, p);
+                for (int l = 0; l < kImpulseOrder; ++l)
+                    z[size_t(l)] += 2.0 * kPiD * wmu * radiance *
+                                    std::sqrt((2.0 * l + 1.0) / (4.0 * kPiD)) * p[l];
+            }
+            zh_[size_t(k) + 1][size_t(bin)] = z;
+            log_fluence_[size_t(k) + 1][size_t(bin)] = std::log(std::sqrt(4.0 * kPiD) * z[0]);
+        });
+    }
+    derive();
+}
+
+SlabMultipleScatter::SlabMultipleScatter(std::vector<std::vector<ZhVector>> zh)
+    : zh_(std::move(zh)) {
+    log_fluence_.assign(zh_.size(), std::vector<double>(ZhDistanceTable::kBins));
+    for (int i = 0; i < ZhDistanceTable::kBins; ++i)
+        log_fluence_[0][size_t(i)] = -ZhDistanceTable::distance_of_bin(i);
+    for (size_t k = 1; k < zh_.size(); ++k)
+        for (int i = 0; i < ZhDistanceTable::kBins; ++i)
+            log_fluence_[k][size_t(i)] = std::log(std::sqrt(4.0 * kPiD) * zh_[k][size_t(i)][0]);
+    derive();
+}
+
+void SlabMultipleScatter::derive() {
+    shape_ = zh_;
+    for (size_t k = 1; k < shape_.size(); ++k)
+        for (ZhVector& z : shape_[k]) {
+            const double dc = z[0];
+            for (double& v : z) v /= dc;
+        }
+    const size_t nk = zh_.size(), nb = ZhDistanceTable::kBins;
+    packed_shape_.assign(nb * nk * kImpulseOrder, 0.0);
+    packed_log_fluence_.assign(nb * nk, 0.0);
+    for (size_t k = 1; k < nk; ++k)
+        for (size_t i = 0; i < nb; ++i) {
+            packed_log_fluence_[i * nk + k] = log_fluence_[k][i];
+            for (size_t l = 0; l < size_t(kImpulseOrder); ++l)
+                packed_shape_[(i * nk + k) * kImpulseOrder + l] = shape_[k][i][l];
+        }
+}
+
+ZhVector SlabMultipleScatter::canonical(int k, double z) const {
+    ZhVector out{};
+    if (k < 1 || k > bounces() || !(z >= 0) || z >= ZhDistanceTable::kMaxD) return out;
+    const double u = grid_u(std::max(z, ZhDistanceTable::kMinD));
+    const double dc = fluence(k, z) / std::sqrt(4.0 * kPiD);
+    const std::vector<ZhVector>& sh = shape_[size_t(k)];
+    for (int l = 0; l < kImpulseOrder; ++l)
+        out[size_t(l)] = dc * catmull_rom([&](int i) { return sh[size_t(i)][size_t(l)]; },
+                                          ZhDistanceTable::kBins, u);
+    return out;
+}
+
+ZhVector SlabMultipleScatter::bounces_in(const HomogeneousMedium& m, double depth, int first,
+                                         int last) const {
+    ZhVector z{};
+    const double c = m.sigma_s / m.sigma_t(), D = m.sigma_t() * depth;
+    first = std::max(first, 1);
+    last = std::min(last, bounces());
+    if (!(D >= 0) || D >= ZhDistanceTable::kMaxD || first > last) return z;
+    // The same Catmull-Rom stencil as canonical(), computed once for every bounce.
+    const int n = ZhDistanceTable::kBins;
+    const double u = std::clamp(grid_u(std::max(D, ZhDistanceTable::kMinD)), 0.0, double(n - 1));
+    const int i = std::min(int(u), n - 2);
+    const double f = u - i, f2 = f * f, f3 = f2 * f;
+    const int bins[4] = {std::max(i - 1, 0), i, i + 1, std::min(i + 2, n - 1)};
+    const double w[4] = {-0.5 * f3 + f2 - 0.5 * f, 1.5 * f3 - 2.5 * f2 + 1.0,
+                         -1.5 * f3 + 2.0 * f2 + 0.5 * f, 0.5 * f3 - 0.5 * f2};
+    const size_t nk = zh_.size();
+    double ck = std::pow(c, first);
+    for (int k = first; k <= last; ++k, ck *= c) {
+        double log_phi = 0.0, shape[kImpulseOrder] = {};
+        for (int j = 0; j < 4; ++j) {
+            const size_t at = size_t(bins[j]) * nk + size_t(k);
+            log_phi += w[j] * packed_log_fluence_[at];
+            const double* row = &packed_shape_[at * kImpulseOrder];
+            for (int l = 0; l < kImpulseOrder; ++l) shape[l] += w[j] * row[l];
+        }
+        const double dc = ck * std::exp(log_phi) / std::sqrt(4.0 * kPiD);
+        for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += dc * shape[l];
+    }
+    return z;
+}
+
+}  // namespace freqlab
