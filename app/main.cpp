@@ -7,6 +7,7 @@
 
 #include "base/error.h"
 #include "commands.h"
+#include "volume/impulse_query.h"
 #ifdef FREQLAB_HAS_UI
 #include "workbench.h"
 #endif
@@ -76,6 +77,9 @@ int main(int argc, char** argv) {
     std::string gui_inspect, gui_warm, gui_session;
     bool gui_compare = false, gui_tables = false;
     gui->add_flag("--tables", gui_tables, "open the method B tables panel");
+    std::string tables_emitter = "point";
+    gui->add_option("--tables-emitter", tables_emitter,
+                    "emitter shown in the tables panel: point, directional or area");
     gui->add_flag("--compare", gui_compare, "render the frame's reference and show the split view");
     gui->add_option("--session", gui_session,
                     "session JSON to load (File > Save session writes one)");
@@ -162,6 +166,7 @@ int main(int argc, char** argv) {
         options.session = gui_session;
         options.compare = gui_compare;
         options.show_tables = gui_tables;
+        options.tables_emitter = int(freqlab::parse_emitter(tables_emitter));
         if (!gui_inspect.empty()) {
             if (std::sscanf(gui_inspect.c_str(), "%d,%d", &options.inspect_x, &options.inspect_y) !=
                 2)

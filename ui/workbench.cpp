@@ -400,6 +400,7 @@ void Workbench::reset(const WorkbenchOptions& options) {
     if (!options.show_timings) s.stat_index = 1;  // rays: the same on every host
     s.split = options.compare;
     s.tables->open = options.show_tables;
+    s.tables->emitter = options.tables_emitter;
     s.pick_x = options.inspect_x;
     s.pick_y = options.inspect_y;
     s.error.clear();

@@ -36,6 +36,7 @@ struct WorkbenchOptions {
     std::string session;       // a session JSON to load at start (overrides the fields above)
     bool compare = false;      // render the reference of the frame and show the split view
     bool show_tables = false;  // open the method B tables panel (and wait for the tables)
+    int tables_emitter = 0;    // EmitterKind shown there first
 };
 
 struct ScreenRect {

@@ -36,11 +36,14 @@ void write_text_atomically(const fs::path& path, const std::string& text) {
 }
 
 std::string read_text_file(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) throw Error(path.string(), "", "cannot open file (does it exist and is it readable?)");
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
+    const std::streamoff size = in.tellg();
+    std::string text(size_t(std::max<std::streamoff>(size, 0)), '\0');
+    in.seekg(0);
+    if (!in.read(text.data(), std::streamsize(text.size())))
+        throw Error(path.string(), "", "could not read the whole file");
+    return text;
 }
 
 fs::path cache_directory() {

@@ -101,7 +101,7 @@ void ImpulseTables::save(const fs::path& path) const {
                          {"bounces", bounces},
                          {"payload_floats", payload.size()},
                          {"payload_halves", halves.size()},
-                         {"checksum", std::to_string(fnv1a(bytes))}};
+                         {"checksum", std::to_string(fnv1a_words(bytes.data(), bytes.size()))}};
     if (path.has_parent_path()) fs::create_directories(path.parent_path());
     write_text_atomically(path, std::string(kMagic) + "\n" + header.dump() + "\n" + bytes);
 }
@@ -134,21 +134,22 @@ ImpulseTables ImpulseTables::load(const fs::path& path) {
     expect("shift_bins", kShiftBins);
     const int bounces = h.value("bounces", -1);
     if (bounces < 1 || bounces > 1000) throw Error(file, "bounces", "expected 1 to 1000");
-    const std::string bytes = text.substr(l2 + 1);
+    const char* bytes_data = text.data() + l2 + 1;
+    const size_t bytes_size = text.size() - l2 - 1;
     const size_t bins = ZhDistanceTable::kBins;
     const size_t expected = payload_floats(bounces);
     const size_t expected_bytes = expected * sizeof(float) + payload_halves() * sizeof(Imath::half);
-    if (bytes.size() != expected_bytes || h.value("payload_floats", size_t(0)) != expected ||
+    if (bytes_size != expected_bytes || h.value("payload_floats", size_t(0)) != expected ||
         h.value("payload_halves", size_t(0)) != payload_halves())
         throw Error(file, "payload",
                     "expected " + std::to_string(expected_bytes) + " bytes, the file has " +
-                        std::to_string(bytes.size()) + " (truncated?)");
-    if (h.value("checksum", std::string()) != std::to_string(fnv1a(bytes)))
+                        std::to_string(bytes_size) + " (truncated?)");
+    if (h.value("checksum", std::string()) != std::to_string(fnv1a_words(bytes_data, bytes_size)))
         throw Error(file, "checksum", "the payload does not match its checksum (damaged file)");
     std::vector<float> payload(expected);
-    std::memcpy(payload.data(), bytes.data(), expected * sizeof(float));
+    std::memcpy(payload.data(), bytes_data, expected * sizeof(float));
     std::vector<Imath::half> halves(payload_halves());
-    std::memcpy(halves.data(), bytes.data() + expected * sizeof(float),
+    std::memcpy(halves.data(), bytes_data + expected * sizeof(float),
                 halves.size() * sizeof(Imath::half));
     const Imath::half* hp = halves.data();
     const float* p = payload.data();

@@ -92,9 +92,8 @@ void PointMultipleScatter::scale() {
     packed_.assign(nb * nk * no, 0.0);
     for (size_t k = 1; k < nk; ++k)
         for (size_t i = 0; i < nb; ++i) {
-            const double D = ZhDistanceTable::distance_of_bin(int(i));
-            for (size_t l = 0; l < no; ++l)
-                packed_[(i * nk + k) * no + l] = zh_[k][i][l] * D * D * std::exp(D);
+            const double D = ZhDistanceTable::distance_of_bin(int(i)), scale = D * D * std::exp(D);
+            for (size_t l = 0; l < no; ++l) packed_[(i * nk + k) * no + l] = zh_[k][i][l] * scale;
         }
 }
 
