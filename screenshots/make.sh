@@ -16,4 +16,4 @@ xvfb-run -a -s "-screen 0 1280x800x24" "$bin" gui scenes/creatures.json --method
 shot compare_split.png scenes/rotor.json --method mis --set mis.spp=4 --set reference.spp=256 \
      --set frame.width=480 --set frame.height=270 --frame 0 --compare
 shot tables_panel.png builtin:default --method gbuffer --frame 0 --tables
-shot tables_panel_area.png builtin:default --method gbuffer --frame 0 --tables --tables-emitter area
+shot tables_panel_area.png builtin:default --method gbuffer --frame 0 --tables --tables-emitter area --size 1280x1100

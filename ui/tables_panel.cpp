@@ -45,6 +45,51 @@ ImU32 colour(int l) {
     return ImGui::ColorConvertFloat4ToU32(ImVec4(c.r, c.g, c.b, 1.0f));
 }
 
+// A 3D glyph of the ZH lobe r(w) = |f(w . axis)|: 16 meridians and 9 parallels of the surface,
+// orthographic view from `yaw` degrees about the vertical and 25 degrees above; positive lobes
+// amber, negative ones blue. The emitter lies along +x (tilted by `tilt` for area emitters).
+void draw_lobe_glyph(ImDrawList* dl, const ZhVector& z, double tilt, float size, float yaw) {
+    const ImVec2 o = ImGui::GetCursorScreenPos();
+    const ImVec2 c(o.x + size / 2, o.y + size / 2);
+    dl->AddRectFilled(o, ImVec2(o.x + size, o.y + size), IM_COL32(30, 30, 34, 255));
+    constexpr int kTheta = 64;
+    double value[kTheta + 1], peak = 0.0;
+    for (int i = 0; i <= kTheta; ++i) {
+        value[i] = zh_eval(kImpulseOrder, z.data(), std::cos(M_PI * i / kTheta));
+        peak = std::max(peak, std::fabs(value[i]));
+    }
+    if (!(peak > 0)) return;
+    const glm::dvec3 axis(std::cos(tilt), std::sin(tilt), 0.0);
+    const glm::dvec3 u(-std::sin(tilt), std::cos(tilt), 0.0), v(0.0, 0.0, 1.0);
+    const double ya = yaw * M_PI / 180.0, pitch = 25.0 * M_PI / 180.0;
+    auto project = [&](int i, double phi) {
+        const double th = M_PI * i / kTheta, r = std::fabs(value[i]) / peak;
+        const glm::dvec3 p =
+            r * (std::cos(th) * axis + std::sin(th) * (std::cos(phi) * u + std::sin(phi) * v));
+        // Yaw about the vertical (y), then pitch: screen x right, y up.
+        const double x1 = std::cos(ya) * p.x + std::sin(ya) * p.z,
+                     z1 = -std::sin(ya) * p.x + std::cos(ya) * p.z;
+        const double y2 = std::cos(pitch) * p.y - std::sin(pitch) * z1;
+        return ImVec2(c.x + float(0.45 * size * x1), c.y - float(0.45 * size * y2));
+    };
+    auto colour_at = [&](int i) {
+        return value[i] >= 0 ? IM_COL32(250, 200, 60, 220) : IM_COL32(90, 150, 250, 220);
+    };
+    for (int m = 0; m < 16; ++m) {
+        const double phi = 2.0 * M_PI * m / 16;
+        for (int i = 0; i < kTheta; ++i)
+            dl->AddLine(project(i, phi), project(i + 1, phi), colour_at(i), 1.0f);
+    }
+    for (int k = 1; k < 10; ++k) {
+        const int i = k * kTheta / 10;
+        for (int m = 0; m < 48; ++m)
+            dl->AddLine(project(i, 2.0 * M_PI * m / 48), project(i, 2.0 * M_PI * (m + 1) / 48),
+                        colour_at(i), 1.0f);
+    }
+    dl->AddText(ImVec2(o.x + 4, o.y + 2), IM_COL32(200, 200, 200, 255), "3D lobe (emitter +x)");
+    ImGui::Dummy(ImVec2(size, size + 4));
+}
+
 }  // namespace
 
 void draw_tables_panel(TablesPanelState& s) {
@@ -135,6 +180,8 @@ void draw_tables_panel(TablesPanelState& s) {
                       z[0]);
     dl->AddText(ImVec2(o.x + 4, o.y + 2), IM_COL32(200, 200, 200, 255), label);
     ImGui::Dummy(ImVec2(size, size + 4));
+    draw_lobe_glyph(dl, z, tilt, size, s.glyph_yaw);
+    ImGui::SliderFloat("glyph yaw", &s.glyph_yaw, -180.0f, 180.0f, "%.0f deg");
 }
 
 }  // namespace freqlab::ui

@@ -21,6 +21,7 @@ struct TablesPanelState {
     int emitter = 0;  // EmitterKind: 0 point, 1 directional, 2 area
     float sigma_s = 1.0f, sigma_a = 0.0f, g = 0.0f, lobe_distance = 1.0f, shift = 0.5f;
     bool surface_variant = false;
+    float glyph_yaw = 35.0f;  // degrees, view of the 3D lobe glyph
     int bounces = 1;
     bool open = false;  // panel opened by default
 };
