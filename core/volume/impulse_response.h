@@ -90,6 +90,13 @@ class ZhDistanceTable {
         bool valid;
     };
     static Stencil stencil(Trend trend, double optical_distance);
+    // sum_k weight[k] value(bin[k]): any per-bin quantity on the same grid.
+    template <class Value>
+    static double interpolate(const Stencil& st, Value value) {
+        double v = 0.0;
+        for (int k = 0; k < 4; ++k) v += st.weight[k] * value(st.bin[k]);
+        return v;
+    }
 
   private:
     double trend(double D) const;

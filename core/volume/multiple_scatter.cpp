@@ -14,29 +14,15 @@ namespace {
 
 constexpr double kPiD = 3.14159265358979323846;
 
-double grid_u(double D) {
-    return std::log(D / ZhDistanceTable::kMinD) /
-           std::log(ZhDistanceTable::kMaxD / ZhDistanceTable::kMinD) * (ZhDistanceTable::kBins - 1);
-}
-
-// Catmull-Rom on a uniform grid at fractional index u (clamped inside the grid).
-double catmull_rom(const std::vector<double>& v, double u) {
-    const int n = int(v.size());
-    u = std::clamp(u, 0.0, double(n - 1));
-    const int i = std::min(int(u), n - 2);
-    const double f = u - i, f2 = f * f, f3 = f2 * f;
-    const int i0 = std::max(i - 1, 0), i3 = std::min(i + 2, n - 1);
-    return (-0.5 * f3 + f2 - 0.5 * f) * v[size_t(i0)] + (1.5 * f3 - 2.5 * f2 + 1.0) * v[size_t(i)] +
-           (-1.5 * f3 + 2.0 * f2 + 0.5 * f) * v[size_t(i) + 1] +
-           (0.5 * f3 - 0.5 * f2) * v[size_t(i3)];
-}
-
 }  // namespace
 
 double PointMultipleScatter::fluence(int k, double D) const {
     if (!(D > 0) || D >= ZhDistanceTable::kMaxD) return 0.0;
+    const std::vector<double>& row = fluence_scaled_[size_t(k)];
     const double scaled =
-        catmull_rom(fluence_scaled_[size_t(k)], grid_u(std::max(D, ZhDistanceTable::kMinD)));
+        ZhDistanceTable::interpolate(ZhDistanceTable::stencil(ZhDistanceTable::Trend::PointLike,
+                                                              std::max(D, ZhDistanceTable::kMinD)),
+                                     [&](int i) { return row[size_t(i)]; });
     return scaled * std::exp(-D) / (D * D);
 }
 

@@ -14,19 +14,10 @@ namespace {
 
 constexpr double kPiD = 3.14159265358979323846;
 
-double grid_u(double z) {
-    return std::log(z / ZhDistanceTable::kMinD) /
-           std::log(ZhDistanceTable::kMaxD / ZhDistanceTable::kMinD) * (ZhDistanceTable::kBins - 1);
-}
-
-template <class Get>
-double catmull_rom(Get v, int n, double u) {
-    u = std::clamp(u, 0.0, double(n - 1));
-    const int i = std::min(int(u), n - 2);
-    const double f = u - i, f2 = f * f, f3 = f2 * f;
-    const int i0 = std::max(i - 1, 0), i3 = std::min(i + 2, n - 1);
-    return (-0.5 * f3 + f2 - 0.5 * f) * v(i0) + (1.5 * f3 - 2.5 * f2 + 1.0) * v(i) +
-           (-1.5 * f3 + 2.0 * f2 + 0.5 * f) * v(i + 1) + (0.5 * f3 - 0.5 * f2) * v(i3);
+// ZhDistanceTable's Catmull-Rom stencil in log depth (its trend is not used here).
+ZhDistanceTable::Stencil depth_stencil(double z) {
+    return ZhDistanceTable::stencil(ZhDistanceTable::Trend::DirectionalLike,
+                                    std::max(z, ZhDistanceTable::kMinD));
 }
 
 }  // namespace
@@ -40,8 +31,8 @@ double SlabMultipleScatter::fluence(int k, double z) const {
         const double slope = (lf[size_t(n) - 1] - lf[size_t(n) - 2]) / (z2 - z1);
         return std::exp(lf[size_t(n) - 1] + slope * (z - z2));
     }
-    const double u = grid_u(std::max(z, ZhDistanceTable::kMinD));
-    return std::exp(catmull_rom([&](int i) { return lf[size_t(i)]; }, n, u));
+    return std::exp(
+        ZhDistanceTable::interpolate(depth_stencil(z), [&](int i) { return lf[size_t(i)]; }));
 }
 
 SlabMultipleScatter::SlabMultipleScatter(int bounces)
@@ -120,12 +111,12 @@ void SlabMultipleScatter::derive() {
 ZhVector SlabMultipleScatter::canonical(int k, double z) const {
     ZhVector out{};
     if (k < 1 || k > bounces() || !(z >= 0) || z >= ZhDistanceTable::kMaxD) return out;
-    const double u = grid_u(std::max(z, ZhDistanceTable::kMinD));
+    const ZhDistanceTable::Stencil st = depth_stencil(z);
     const double dc = fluence(k, z) / std::sqrt(4.0 * kPiD);
     const std::vector<ZhVector>& sh = shape_[size_t(k)];
     for (int l = 0; l < kImpulseOrder; ++l)
-        out[size_t(l)] = dc * catmull_rom([&](int i) { return sh[size_t(i)][size_t(l)]; },
-                                          ZhDistanceTable::kBins, u);
+        out[size_t(l)] =
+            dc * ZhDistanceTable::interpolate(st, [&](int i) { return sh[size_t(i)][size_t(l)]; });
     return out;
 }
 
@@ -136,14 +127,10 @@ ZhVector SlabMultipleScatter::bounces_in(const HomogeneousMedium& m, double dept
     first = std::max(first, 1);
     last = std::min(last, bounces());
     if (!(D >= 0) || D >= ZhDistanceTable::kMaxD || first > last) return z;
-    // The same Catmull-Rom stencil as canonical(), computed once for every bounce.
-    const int n = ZhDistanceTable::kBins;
-    const double u = std::clamp(grid_u(std::max(D, ZhDistanceTable::kMinD)), 0.0, double(n - 1));
-    const int i = std::min(int(u), n - 2);
-    const double f = u - i, f2 = f * f, f3 = f2 * f;
-    const int bins[4] = {std::max(i - 1, 0), i, i + 1, std::min(i + 2, n - 1)};
-    const double w[4] = {-0.5 * f3 + f2 - 0.5 * f, 1.5 * f3 - 2.5 * f2 + 1.0,
-                         -1.5 * f3 + 2.0 * f2 + 0.5 * f, 0.5 * f3 - 0.5 * f2};
+    // The same stencil as canonical(), computed once for every bounce.
+    const ZhDistanceTable::Stencil st = depth_stencil(D);
+    const int* bins = st.bin;
+    const double* w = st.weight;
     const size_t nk = zh_.size();
     double ck = std::pow(c, first);
     for (int k = first; k <= last; ++k, ck *= c) {

@@ -14,24 +14,26 @@ const ImpulseTables& tables() {
     return t;
 }
 
-void BM_TableQuery_PointSingle(benchmark::State& state) {
-    const ImpulseTables& t = tables();
-    HomogeneousMedium m{0.7, 0.05, 0.3};
+// Queries along a slow sweep of distances (0.01 to 5, 1 % steps), as a baker's neighbouring
+// texels would make them.
+template <class Query>
+void sweep_distances(benchmark::State& state, Query query) {
     double d = 0.01;
     for (auto _ : state) {
         d = d > 5.0 ? 0.01 : d * 1.01;
-        benchmark::DoNotOptimize(t.point_single().single(m, d));
+        benchmark::DoNotOptimize(query(d));
     }
 }
 
+void BM_TableQuery_PointSingle(benchmark::State& state) {
+    const HomogeneousMedium m{0.7, 0.05, 0.3};
+    sweep_distances(state, [&](double d) { return tables().point_single().single(m, d); });
+}
+
 void BM_TableQuery_PointMultiple10(benchmark::State& state) {
-    const ImpulseTables& t = tables();
-    HomogeneousMedium m{0.7, 0.05, 0.0};
-    double d = 0.01;
-    for (auto _ : state) {
-        d = d > 5.0 ? 0.01 : d * 1.01;
-        benchmark::DoNotOptimize(t.point_multiple().bounces_in(m, d, 2, 10));
-    }
+    const HomogeneousMedium m{0.7, 0.05, 0.0};
+    sweep_distances(state,
+                    [&](double d) { return tables().point_multiple().bounces_in(m, d, 2, 10); });
 }
 
 void BM_TableQuery_AreaSingle(benchmark::State& state) {
@@ -46,13 +48,9 @@ void BM_TableQuery_AreaSingle(benchmark::State& state) {
 }
 
 void BM_TableQuery_DirectionalMultiple10(benchmark::State& state) {
-    const ImpulseTables& t = tables();
-    HomogeneousMedium m{0.7, 0.05, 0.0};
-    double d = 0.01;
-    for (auto _ : state) {
-        d = d > 5.0 ? 0.01 : d * 1.01;
-        benchmark::DoNotOptimize(t.directional_multiple().bounces_in(m, d, 2, 10));
-    }
+    const HomogeneousMedium m{0.7, 0.05, 0.0};
+    sweep_distances(
+        state, [&](double d) { return tables().directional_multiple().bounces_in(m, d, 2, 10); });
 }
 
 // The whole query as the bakers call it: direct + single + bounces 2..30, area emitter.
