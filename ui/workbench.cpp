@@ -93,7 +93,7 @@ ImU32 to_u32(const vec3& c) {
 void draw_settings_panel(Workbench::State& s) {
     ImGui::Text("scene: %s", s.scene.name.c_str());
     int method = int(s.config.method);
-    const char* methods = "gbuffer\0mis\0reference\0";
+    const char* methods = "gbuffer\0mis\0reference\0points\0";
     if (ImGui::Combo("method", &method, methods) && method != int(s.config.method)) {
         s.config.method = RenderMethod(method);
         restart_renderer(s);

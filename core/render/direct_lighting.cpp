@@ -83,7 +83,8 @@ RadianceEstimate DirectLighting::shade_hit(const SurfaceHit& hit, const vec3& wo
     return e;
 }
 
-RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, CounterRng& rng) const {
+RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, CounterRng& rng,
+                                          std::vector<CastSample>* cast) const {
     RadianceEstimate result;
     const Brdf brdf(*sp.material, sp.albedo, sp.shading_normal);
     const int n_env = (spp + 1) / 2;
@@ -168,6 +169,9 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
     }
     scene_.occluded_stream(s.rays.data(), int(n_rays), s.occluded.get());
     if (recorded_) recorded_->insert(recorded_->end(), s.rays.begin(), s.rays.end());
+    if (cast)
+        for (size_t k = 0; k < n_rays; ++k)
+            cast->push_back(CastSample{s.rays[k], s.occluded[k], s.unit[k] < 0});
     if (traced_)
         for (size_t k = 0; k < n_rays; ++k) (*traced_)[traced_before + k].occluded = s.occluded[k];
     result.rays = long(n_rays);

@@ -49,8 +49,16 @@ class DirectLighting {
     RadianceEstimate trace(const Ray& ray, int spp, CounterRng& rng, int depth = 0) const;
     RadianceEstimate shade_hit(const SurfaceHit& hit, const vec3& wo, int spp, CounterRng& rng,
                                int depth = 0) const;
-    // The estimator at a point (no mirror handling): what trace() uses and tests call.
-    RadianceEstimate estimate(const ShadingPoint& point, int spp, CounterRng& rng) const;
+    // One cast shadow ray of estimate(): what method A's radiance points gather statistics on.
+    struct CastSample {
+        Ray ray;
+        bool occluded;
+        bool brdf_strategy;
+    };
+    // The estimator at a point (no mirror handling): what trace() uses and tests call. With
+    // `cast`, every shadow ray and its visibility is appended (thread-safe: caller's vector).
+    RadianceEstimate estimate(const ShadingPoint& point, int spp, CounterRng& rng,
+                              std::vector<CastSample>* cast = nullptr) const;
 
     ShadingPoint shading_point(const SurfaceHit& hit, const vec3& wo) const;
     // --debug-pixel: every sample of estimate() is appended here (single-threaded use).

@@ -5,6 +5,7 @@
 
 #include "base/error.h"
 #include "render/gbuffer.h"
+#include "render/points_pass.h"
 #include "render/shading_pass.h"
 
 namespace freqlab {
@@ -26,13 +27,13 @@ const std::vector<std::string>& render_method_names() {
 
 RenderMethod parse_render_method(const std::string& name) {
     const auto& names = render_method_names();
-    // gbuffer, mis and reference exist; the others arrive with method A's issues.
+    // gbuffer, mis, reference and points exist; the others arrive with method A's issues.
     for (size_t i = 0; i < names.size(); ++i) {
         if (name != names[i]) continue;
-        if (i <= 2) return RenderMethod(i);
+        if (i <= 3) return RenderMethod(i);
         throw Error("--method", name,
                     "this method is not implemented yet (it lands with its issue); the "
-                    "implemented methods are: gbuffer, mis, reference");
+                    "implemented methods are: gbuffer, mis, reference, points");
     }
     std::string list;
     for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
@@ -46,6 +47,7 @@ SettingsGroup RenderConfig::settings_group() {
     g.bind(ShadingSettings::schema(), &shading);
     g.bind(MisSettings::schema(), &mis);
     g.bind(ReferenceSettings::schema(), &reference);
+    g.bind(PointsSettings::schema(), &points);
     return g;
 }
 
@@ -55,6 +57,8 @@ int RenderConfig::spp() const {
             return mis.spp;
         case RenderMethod::Reference:
             return reference.spp;
+        case RenderMethod::Points:
+            return points.max_samples;
         default:
             return 0;
     }
@@ -70,6 +74,14 @@ long count_nonfinite(const LayerSet& layers) {
 FrameRenderer::FrameRenderer(const Scene& scene, const RenderConfig& config,
                              const EmbreeDevice& device)
     : scene_(scene), config_(config), ray_scene_(scene, device) {}
+
+const EnvBandwidthHierarchy* FrameRenderer::bandwidth() {
+    const EnvironmentMap* env = scene_.environment();
+    if (!env) return nullptr;  // no environment: B_L = 0, nothing to build
+    if (!bandwidth_)
+        bandwidth_ = std::make_unique<EnvBandwidthHierarchy>(EnvBandwidthHierarchy::cached(*env));
+    return bandwidth_.get();
+}
 
 FrameResult FrameRenderer::render(int frame, Progress& progress) {
     const auto t_start = Clock::now();
@@ -117,6 +129,17 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
             shade_pixels(ray_scene_, gb.gbuffer, frame, config_.frame, config_.spp(),
                          config_.shading, result.layers, progress);
         stages["shading"] = ms_since(t0);
+        rays += out.rays;
+        guarded = out.nonfinite;
+    } else if (config_.method == RenderMethod::Points) {
+        t0 = Clock::now();
+        const EnvBandwidthHierarchy* bw = bandwidth();
+        stages["env_bandwidth"] = ms_since(t0);
+        t0 = Clock::now();
+        const PointsPassOutput out =
+            render_points(ray_scene_, gb.gbuffer, frame, config_.frame, config_.shading,
+                          config_.points, bw, result.layers, progress);
+        stages["radiance_points"] = ms_since(t0);
         rays += out.rays;
         guarded = out.nonfinite;
     }

@@ -10,6 +10,7 @@
 
 #include "accel/ray_scene.h"
 #include "base/job.h"
+#include "freq/env_bandwidth.h"
 #include "image/layers.h"
 #include "render/reference_cache.h"
 #include "settings/render_settings.h"
@@ -30,6 +31,7 @@ struct RenderConfig {
     ShadingSettings shading;
     MisSettings mis;
     ReferenceSettings reference;
+    PointsSettings points;
     int spp() const;  // the sample count of the chosen method (0 for gbuffer)
     // Methods with state across frames (method A's cache) must render frames in order.
     bool needs_previous_frames() const { return method == RenderMethod::Cache; }
@@ -59,6 +61,8 @@ class FrameRenderer {
     RenderConfig config_;
     RayScene ray_scene_;
     ReferenceCache cache_;
+    std::unique_ptr<EnvBandwidthHierarchy> bandwidth_;  // method A: built on first use
+    const EnvBandwidthHierarchy* bandwidth();
 };
 
 // Counts NaN/Inf values over all layers (they are reported, never silently kept).

@@ -5,6 +5,8 @@
 
 #include "render/direct_lighting.h"
 #include "render/frame_renderer.h"
+#include "render/points_pass.h"
+#include "render/radiance_point.h"
 #include "render/shading_pass.h"
 
 namespace freqlab {
@@ -49,6 +51,30 @@ std::vector<std::string> FrameRenderer::trace_pixel(const FrameResult& r, int x,
     if (sp.material->type == BrdfType::Mirror) {
         line("perfect mirror: followed up to shading.mirror_depth = %d bounces",
              config.shading.mirror_depth);
+        return out;
+    }
+    if (config.method == RenderMethod::Points) {
+        // The radiance point's whole chain, with the render's seed keys and G-buffer context.
+        auto hit_at = [&](int px, int py) {
+            return rs.intersect(Ray{cam.origin, cam.direction((px + 0.5f) / r.layers.width(),
+                                                              (py + 0.5f) / r.layers.height())});
+        };
+        SurfaceHit neighbours[4];
+        int count = 0;
+        if (x + 1 < r.layers.width()) neighbours[count++] = hit_at(x + 1, y);
+        if (x > 0) neighbours[count++] = hit_at(x - 1, y);
+        if (y + 1 < r.layers.height()) neighbours[count++] = hit_at(x, y + 1);
+        if (y > 0) neighbours[count++] = hit_at(x, y - 1);
+        PointContext ctx;
+        ctx.curvature = screen_space_curvature(hit, neighbours, count);
+        ctx.eye_distance = hit.distance;
+        line("screen-space curvature k = %.5g, eye distance %.5g", ctx.curvature, ctx.eye_distance);
+        const RadiancePointIntegrator integrator(rs, config.shading, config.points, bandwidth());
+        CounterRng rng(uint64_t(config.frame.seed) ^ kPointsStream, uint64_t(r.frame),
+                       size_t(y) * r.layers.width() + x, 0);
+        std::vector<std::string> chain;
+        integrator.integrate(sp, ctx, rng, &chain);
+        out.insert(out.end(), chain.begin(), chain.end());
         return out;
     }
     std::vector<DirectLighting::SampleTrace> samples;

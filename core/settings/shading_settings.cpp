@@ -25,6 +25,36 @@ const SettingsSchema& ReferenceSettings::schema() {
     return s;
 }
 
+const SettingsSchema& PointsSettings::schema() {
+    static const SettingsSchema s =
+        SchemaBuilder<PointsSettings>("points", "Radiance points")
+            .field(&PointsSettings::max_samples, "max_samples", 2, 1 << 16, "samples",
+                   kInvalidatesShading,
+                   "N_max: the spherical sampling budget of one radiance point; occlusion adds up "
+                   "to N_max - N_L samples (seed Eq. 4.3, f_V).")
+            .field(&PointsSettings::min_samples, "min_samples", 2, 1 << 16, "samples",
+                   kInvalidatesShading,
+                   "Lower bound of N_L = 4 B^2: a smooth environment still needs samples to "
+                   "find occluders.")
+            .field(&PointsSettings::max_pilot, "max_pilot", 2, 1 << 16, "samples",
+                   kInvalidatesShading,
+                   "Upper bound of N_L = 4 B^2. Real HDR maps have sharp lights: their 95th-"
+                   "percentile bandwidth asks for thousands of samples, which would leave no "
+                   "budget for f_V's occlusion samples (seed Eq. 4.3).")
+            .field(&PointsSettings::stride, "stride", 1, 64, "px", kInvalidatesShading,
+                   "A radiance point every k-th pixel in x and y; the k x k block shows it.")
+            .field(&PointsSettings::large_distance, "large_distance", 0.01, 1e6, "x scene radius",
+                   kInvalidatesShading,
+                   "Occluder distance assumed when no pilot sample is occluded, in units of the "
+                   "scene's bounding radius (the transport operator's t_min).")
+            .field(&PointsSettings::reuse_pilot, "reuse_pilot", 0, 1, "", kInvalidatesShading,
+                   "Average the N_L pilot samples into the estimate as the seed does. The "
+                   "sample count then depends on the samples it averages, which biases the "
+                   "estimate; off, the pilot only decides and N_Omega fresh samples estimate.")
+            .build();
+    return s;
+}
+
 const SettingsSchema& ShadingSettings::schema() {
     static const SettingsSchema s =
         SchemaBuilder<ShadingSettings>("shading", "Shading")

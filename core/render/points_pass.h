@@ -1,0 +1,31 @@
+// `--method points`: a radiance point (render/radiance_point.h) at every pixel, or every k-th
+// (points.stride; the k x k block shows it), writing its estimate and every quantity of its
+// frequency analysis as layers.
+#pragma once
+
+#include "freq/env_bandwidth.h"
+#include "render/gbuffer.h"
+#include "render/radiance_point.h"
+
+namespace freqlab {
+
+struct PointsPassOutput {
+    long rays = 0;
+    long nonfinite = 0;
+};
+
+// The layers written, in order (after `color` and `variance`).
+const std::vector<std::string>& radiance_point_layer_names();
+
+PointContext point_context(const GBuffer& gbuffer, int x, int y);
+
+PointsPassOutput render_points(const RayScene& scene, const GBuffer& gbuffer, int frame,
+                               const FrameSettings& frame_settings, const ShadingSettings& shading,
+                               const PointsSettings& settings,
+                               const EnvBandwidthHierarchy* bandwidth, LayerSet& layers,
+                               Progress& progress);
+
+// Seed purpose tag of radiance points (distinct from the shading pass's stream).
+constexpr uint64_t kPointsStream = 0x504f494e54ULL;  // "POINT"
+
+}  // namespace freqlab

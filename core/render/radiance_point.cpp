@@ -1,0 +1,233 @@
+#include "render/radiance_point.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "freq/brdf_footprint.h"
+#include "freq/covariance.h"
+#include "math/sampling.h"
+
+namespace freqlab {
+
+namespace {
+
+constexpr double kPiD = 3.14159265358979323846;
+// sqrt(E[theta^2] / 2) for the cosine-weighted hemisphere: E[theta^2] = pi^2 / 4 - 1.
+const double kLambertSigma = std::sqrt(0.5 * (kPiD * kPiD / 4.0 - 1.0));
+
+double phong_like_exponent(const Material& m) {
+    switch (m.type) {
+        case BrdfType::Phong:
+            return m.phong_exponent;
+        case BrdfType::Beckmann:
+        case BrdfType::Ggx:
+            return phong_exponent_of_roughness(m.roughness);
+        default:
+            return 1.0;
+    }
+}
+
+void frame_of(const glm::dvec3& n, glm::dvec3& t, glm::dvec3& b) {
+    t = glm::normalize(std::fabs(n.z) < 0.9 ? glm::cross(glm::dvec3(0, 0, 1), n)
+                                            : glm::cross(glm::dvec3(1, 0, 0), n));
+    b = glm::cross(n, t);
+}
+
+template <class... Args>
+void say(std::vector<std::string>* chain, const char* format, Args... args) {
+    if (!chain) return;
+    char buf[512];
+    std::snprintf(buf, sizeof buf, format, args...);
+    chain->push_back(buf);
+}
+
+void say_matrix(std::vector<std::string>* chain, const char* name, const Mat2& m) {
+    say(chain, "  %-16s [[%.6g, %.6g], [%.6g, %.6g]]", name, m[0][0], m[1][0], m[0][1], m[1][1]);
+}
+
+}  // namespace
+
+double screen_space_curvature(const SurfaceHit& c, const SurfaceHit* neighbours, int count) {
+    double k = 0.0;
+    for (int i = 0; i < count; ++i) {
+        const SurfaceHit& o = neighbours[i];
+        if (!o.valid || o.object != c.object) continue;
+        const double dp = glm::length(glm::dvec3(o.position - c.position));
+        if (dp <= 0) continue;
+        k = std::max(k, glm::length(glm::dvec3(o.shading_normal - c.shading_normal)) / dp);
+    }
+    return k;
+}
+
+RadiancePointIntegrator::RadiancePointIntegrator(const RayScene& scene,
+                                                 const ShadingSettings& shading,
+                                                 const PointsSettings& settings,
+                                                 const EnvBandwidthHierarchy* bandwidth)
+    : scene_(scene), lighting_(scene, shading), settings_(settings), bandwidth_(bandwidth) {
+    const double radius = 0.5 * glm::length(glm::dvec3(scene.bounds_max() - scene.bounds_min()));
+    large_distance_ = settings.large_distance * std::max(radius, 1e-3);
+}
+
+RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const PointContext& ctx,
+                                                 CounterRng& rng,
+                                                 std::vector<std::string>* chain) const {
+    RadiancePoint rp;
+    const Material& material = *sp.material;
+    const BrdfFootprint footprint = brdf_footprint(material);
+    const glm::dvec3 n(sp.shading_normal), wo(sp.wo);
+    const glm::dvec3 mu =
+        footprint.whole_hemisphere ? n : glm::dvec3(reflect_about(sp.wo, sp.shading_normal));
+    const double radius = footprint.query_radius();
+    rp.sigma_rho = footprint.whole_hemisphere ? kLambertSigma : std::atan(footprint.sigma);
+    rp.B_L = bandwidth_ ? bandwidth_->query(vec3(mu), radius) : 0.0;
+    const double b_cone = rp.B_L * 2.0 * radius;
+    const int n_max = std::max(settings_.max_samples, 2);
+    int n_l = int(std::ceil(4.0 * b_cone * b_cone));
+    const int pilot_max = std::clamp(settings_.max_pilot, 2, n_max);
+    n_l = std::clamp(n_l, std::min(settings_.min_samples, pilot_max), pilot_max);
+    n_l += n_l % 2;
+    n_l = std::min(n_l, n_max);
+    rp.N_L = n_l;
+    say(chain,
+        "footprint: %s, mu_rho = (%.4f, %.4f, %.4f), query radius %.4f rad, sigma_rho %.5f rad",
+        footprint.whole_hemisphere ? "whole hemisphere" : "Phong-like lobe", mu.x, mu.y, mu.z,
+        radius, rp.sigma_rho);
+    say(chain,
+        "B_L = %.5g cycles/rad -> %.4g cycles across the footprint -> N_L = 4 B^2 = %d "
+        "(clamped to [%d, %d])",
+        rp.B_L, b_cone, n_l, settings_.min_samples, pilot_max);
+
+    // Pilot: N_L MIS samples, every shadow ray kept with its visibility.
+    std::vector<DirectLighting::CastSample> cast;
+    const RadianceEstimate pilot = lighting_.estimate(sp, n_l, rng, &cast);
+    rp.rays += pilot.rays;
+    rp.pilot_rays = int(cast.size());
+    const Brdf brdf(material, sp.albedo, sp.shading_normal);
+    glm::dvec3 t, b;
+    frame_of(mu, t, b);
+    double a_o = 0.0, w_all = 0.0, nearest = INFINITY;
+    glm::dvec2 mean_q(0.0);
+    glm::dvec3 mean_p(0.0);
+    struct Occluder {
+        glm::dvec2 q;
+        glm::dvec3 p;
+        double w;
+    };
+    std::vector<Occluder> occluders;
+    for (const auto& c : cast) {
+        const glm::dvec3 d(c.ray.direction);
+        const double w = std::max(double(brdf.pdf(sp.wo, c.ray.direction)), 0.0);
+        const double theta = std::acos(std::clamp(glm::dot(d, mu), -1.0, 1.0));
+        const glm::dvec2 tb(glm::dot(d, t), glm::dot(d, b));
+        const double len = glm::length(tb);
+        const glm::dvec2 q = len > 0 ? theta * tb / len : glm::dvec2(0.0);
+        rp.cone_samples.push_back({float(q.x), float(q.y), c.occluded});
+        w_all += w;
+        if (!c.occluded) continue;
+        ++rp.pilot_occluded;
+        // The occluder's hit point (one more ray: occlusion rays do not report distances).
+        const SurfaceHit hit = scene_.intersect(c.ray);
+        ++rp.rays;
+        const double dist = hit.valid ? hit.distance : large_distance_;
+        nearest = std::min(nearest, dist);
+        const glm::dvec3 p = d * dist;  // relative to the shading point, world axes
+        occluders.push_back({q, p, w});
+        a_o += w;
+        mean_q += w * q;
+        mean_p += w * p;
+    }
+    rp.occlusion_ratio = w_all > 0 ? a_o / w_all : 0.0;
+    say(chain, "pilot: %d shadow rays, %d occluded, BRDF-weighted occlusion ratio %.4f",
+        rp.pilot_rays, rp.pilot_occluded, rp.occlusion_ratio);
+    double f_v = 0.0;
+    if (rp.pilot_occluded > 0 && a_o > 0) {
+        mean_q /= a_o;
+        mean_p /= a_o;
+        glm::dmat2 sigma_q(0.0);
+        glm::dmat3 sigma_p(0.0);
+        for (const Occluder& o : occluders) {
+            const double w2 = o.w * o.w;
+            sigma_q += w2 * glm::outerProduct(o.q - mean_q, o.q - mean_q);
+            sigma_p += w2 * glm::outerProduct(o.p - mean_p, o.p - mean_p);
+        }
+        const double norm = n_l > 1 ? double(n_l) / ((n_l - 1.0) * a_o * a_o) : 0.0;
+        sigma_q *= norm;
+        sigma_p *= norm;
+        rp.sigma_V = std::sqrt(std::max(sigma_q[0][0], sigma_q[1][1]));
+        const double x = rp.sigma_V / rp.sigma_rho;
+        f_v = (n_max - n_l) * std::exp(-0.5 * (x - 0.5) * (x - 0.5));
+        const double mu_t = glm::length(mean_p);
+        const glm::dvec3 axis = mu_t > 0 ? mean_p / mu_t : mu;
+        const double sigma_t = std::sqrt(std::max(glm::dot(axis, sigma_p * axis), 0.0));
+        rp.t_min = mu_t - 3.0 * sigma_t;
+        say(chain, "mu_o (cone angles) = (%.5f, %.5f), Sigma_o = [[%.4g, %.4g], [%.4g, %.4g]]",
+            mean_q.x, mean_q.y, sigma_q[0][0], sigma_q[1][0], sigma_q[0][1], sigma_q[1][1]);
+        say(chain, "sigma_V = %.5f rad, x = sigma_V / sigma_rho = %.4f, f_V = %.2f", rp.sigma_V, x,
+            f_v);
+        say(chain, "occluder distance mu_t = %.5f, sigma_t = %.5f, mu_t - 3 sigma_t = %.5f%s", mu_t,
+            sigma_t, rp.t_min, rp.t_min <= 0 ? " <= 0: nearest pilot hit used" : "");
+        if (!(rp.t_min > 0)) rp.t_min = nearest;
+    } else {
+        rp.t_min = large_distance_;
+        say(chain, "no occluded pilot sample: f_V = 0, t_min = large distance %.4g", rp.t_min);
+    }
+    const int n_omega = std::min(n_max, n_l + int(std::lround(f_v)));
+    rp.N_omega = n_omega;
+    say(chain, "N_Omega = min(N_max, N_L + f_V) = %d", n_omega);
+
+    // The estimate (see the header on reuse_pilot).
+    if (settings_.reuse_pilot) {
+        const int extra = n_omega - n_l;
+        if (extra > 0) {
+            const RadianceEstimate more = lighting_.estimate(sp, extra, rng);
+            rp.rays += more.rays;
+            const float a = float(n_l) / n_omega, c = 1.0f - a;
+            rp.radiance = a * pilot.radiance + c * more.radiance;
+            rp.variance = a * a * pilot.variance + c * c * more.variance;
+        } else {
+            rp.radiance = pilot.radiance;
+            rp.variance = pilot.variance;
+        }
+    } else {
+        const RadianceEstimate e = lighting_.estimate(sp, n_omega, rng);
+        rp.rays += e.rays;
+        rp.radiance = e.radiance;
+        rp.variance = e.variance;
+    }
+    say(chain, "estimate (%.6g, %.6g, %.6g), variance %.4g, %ld rays in all", rp.radiance.x,
+        rp.radiance.y, rp.radiance.z, rp.variance, rp.rays);
+
+    // Bandwidths (Eq. 5.2-5.3, Appendix 9).
+    CovarianceInputs in;
+    in.sigma_l2 = (rp.B_L / 3.0) * (rp.B_L / 3.0);
+    in.cos_in = std::max(glm::dot(n, mu), 0.05);
+    in.curvature = ctx.curvature;
+    in.b = phong_bandwidth_b(phong_like_exponent(material));
+    in.inv_cos_view = 1.0 / std::max(glm::dot(n, wo), 0.05);
+    in.eye_distance = ctx.eye_distance;
+    in.t_min = rp.t_min;
+    const CovarianceResult cov = occluded_covariance_limit(in);
+    rp.B_S = 3.0 * std::sqrt(std::max(cov.image[1][1], 0.0));
+    rp.B_x = 3.0 * std::sqrt(std::max(cov.object[0][0], 0.0));
+    rp.B_theta = 3.0 * std::sqrt(std::max(cov.object[1][1], 0.0));
+    say(chain,
+        "covariance inputs: sigma_L^2 = %.5g, c_i = %.4f, k = %.4g, b = %.5g, c_v = %.4f, d = "
+        "%.5g, "
+        "t_min = %.5g",
+        in.sigma_l2, in.cos_in, in.curvature, in.b, in.inv_cos_view, in.eye_distance, in.t_min);
+    if (chain) {
+        say_matrix(chain, "T_{V->x}(t_min)", travel_operator(in.t_min));
+        say_matrix(chain, "C_L", surface_in_operator(in.cos_in, in.curvature));
+        say_matrix(chain, "B_rho", brdf_operator(in.b));
+        say_matrix(chain, "C_v", surface_out_operator(in.inv_cos_view, in.curvature));
+        say_matrix(chain, "T_{x->v}(d)", travel_operator(in.eye_distance));
+        say_matrix(chain, "Sigma^o (object)", cov.object);
+        say_matrix(chain, "Sigma (image)", cov.image);
+    }
+    say(chain, "B_S = 3 sqrt(Sigma_theta) = %.5g, B_x = %.5g, B_theta = %.5g", rp.B_S, rp.B_x,
+        rp.B_theta);
+    return rp;
+}
+
+}  // namespace freqlab

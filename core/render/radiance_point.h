@@ -1,0 +1,79 @@
+// Method A's adaptive radiance point (seed, Premier article §4 Eq. 4.1-4.5, §5.1 Eq. 5.1-5.3,
+// Appendix 9): the spherical sample count chosen from the environment's bandwidth inside the
+// BRDF's footprint and from the occlusion a pilot finds there, and the point's spatio-angular
+// bandwidths for image-space sampling.
+//
+// | quantity        | definition here                                                         |
+// |-----------------|-------------------------------------------------------------------------|
+// | mu_rho, sigma_rho | footprint axis (mirror direction; the normal for Lambert) and its angular |
+// |                 | standard deviation: atan(sqrt(Var[e])) (Eq. 4.2), 0.8566 rad for the       |
+// |                 | clamped cosine (sqrt(E[theta^2] / 2) over the cosine-weighted hemisphere)  |
+// | B_L             | environment bandwidth (cycles/rad) queried at (mu_rho, atan(3 sigma))     |
+// | N_L             | 4 B^2 with B = B_L x the footprint's width 2 r (cycles across it),        |
+// |                 | clamped to [points.min_samples, points.max_pilot], even                 |
+// | mu_o, Sigma_o   | Eq. 4.4 over the pilot's occluded samples, weights rho_i = BRDF pdf, on   |
+// |                 | the samples' angular coordinates theta (cos phi, sin phi) in the cone frame|
+// |                 | (so sigma_V compares with sigma_rho: the seed's hit points have units)    |
+// | sigma_V         | Eq. 4.5: the larger tangent / binormal deviation of Sigma_o               |
+// | f_V, N_Omega    | (N_max - N_L) exp(-(x - 1/2)^2 / 2), x = sigma_V / sigma_rho; 0 when no   |
+// |                 | pilot sample is occluded; N_Omega = min(N_max, N_L + f_V) (Eq. 4.3)       |
+// | t_min           | Eq. 5.1 on the occluders' 3D hit points: mu_t - 3 sigma_t; when that is   |
+// |                 | <= 0 (spread-out occluders) the nearest pilot hit distance instead        |
+// | B_S, B_x, B_theta | 3 sqrt of the image covariance's angular variance (Eq. 5.2-5.3), and of |
+// |                 | the object-space covariance's spatial and angular variances (App. 9)    |
+// | estimate        | points.reuse_pilot off: N_Omega fresh MIS samples (the pilot only         |
+// |                 | decides, so the count cannot bias the mean); on: the seed's reuse        |
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "freq/env_bandwidth.h"
+#include "render/direct_lighting.h"
+#include "settings/shading_settings.h"
+
+namespace freqlab {
+
+struct RadiancePoint {
+    vec3 radiance{0.0f};
+    float variance = 0.0f;
+    long rays = 0;
+    double B_L = 0.0, sigma_rho = 0.0, N_L = 0.0, N_omega = 0.0, sigma_V = 0.0;
+    double occlusion_ratio = 0.0, t_min = 0.0, B_S = 0.0, B_x = 0.0, B_theta = 0.0;
+    int pilot_rays = 0, pilot_occluded = 0;
+    // The pilot's samples in the cone frame (for the inspector): angular coordinates, occluded.
+    struct ConeSample {
+        float u, v;
+        bool occluded;
+    };
+    std::vector<ConeSample> cone_samples;
+};
+
+// Geometry of the pixel the point shades, from the G-buffer.
+struct PointContext {
+    double curvature = 0.0;     // screen-space estimate (1 / scene units)
+    double eye_distance = 1.0;  // from the camera
+};
+
+// |n1 - n0| / |p1 - p0| over the pixel's neighbours on the same object (the larger of x, y).
+double screen_space_curvature(const SurfaceHit& centre, const SurfaceHit* neighbours, int count);
+
+class RadiancePointIntegrator {
+  public:
+    // `bandwidth` may be null (no environment map: B_L = 0).
+    RadiancePointIntegrator(const RayScene& scene, const ShadingSettings& shading,
+                            const PointsSettings& settings, const EnvBandwidthHierarchy* bandwidth);
+    // With `chain`, every input, operator and intermediate value is appended as text.
+    RadiancePoint integrate(const ShadingPoint& point, const PointContext& context, CounterRng& rng,
+                            std::vector<std::string>* chain = nullptr) const;
+    const DirectLighting& lighting() const { return lighting_; }
+
+  private:
+    const RayScene& scene_;
+    DirectLighting lighting_;
+    PointsSettings settings_;
+    const EnvBandwidthHierarchy* bandwidth_;
+    double large_distance_;
+};
+
+}  // namespace freqlab
