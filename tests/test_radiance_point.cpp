@@ -148,7 +148,7 @@ TEST(RadiancePoint, RotorSamplesAndBandwidthConcentrateAtShadowsAndEdges) {
             if (silhouette || (f > 0.1 && f < 0.9)) {
                 edge_b += b_s.data[p];
                 ++edge;
-            } else if (f > 0.995 && point_context(gb.gbuffer, x, y).curvature == 0.0) {
+            } else if (f > 0.995 && point_context(gb.gbuffer, x, y, 0.0f).curvature == 0.0) {
                 flat_b += b_s.data[p];
                 ++flat;
             }
@@ -163,4 +163,27 @@ TEST(RadiancePoint, RotorSamplesAndBandwidthConcentrateAtShadowsAndEdges) {
                 edge, flat_b / flat, flat, (edge_b / edge) / (flat_b / flat));
     EXPECT_GE(pen_n / pen, 2.0 * lit_n / lit);
     EXPECT_GE(edge_b / edge, 2.0 * flat_b / flat);
+}
+
+TEST(RadiancePoint, OccluderVelocityAndTemporalBandwidth) {
+    // A spin of 2 rad/s about z: a point at radius 1.5 moves at 3 units/s, tangentially.
+    Animation spin;
+    spin.spin_rad_per_s = 2.0f;
+    const vec3 v = spin.velocity_of(vec3(1.5f, 0, 0.3f), 0.7f);
+    EXPECT_NEAR(glm::length(v), 3.0, 1e-3);
+    EXPECT_NEAR(glm::dot(v, vec3(1, 0, 0)), 0.0, 1e-3);
+    EXPECT_EQ(glm::length(Animation{}.velocity_of(vec3(1, 2, 3), 0.5f)), 0.0f);
+
+    // Nothing moves in sphere_on_plane: occluded or not, no radiance point expires (B_t = 0).
+    const Scene scene = load_scene(FREQLAB_SOURCE_DIR "/scenes/analytic/sphere_on_plane.json");
+    EmbreeDevice device(2);
+    RayScene rs(scene, device);
+    const RadiancePointIntegrator integrator(rs, ShadingSettings{}, PointsSettings{}, nullptr);
+    CounterRng rng(1, 0, 0, 0);
+    PointContext ctx;
+    ctx.object = 0;
+    const RadiancePoint rp =
+        integrator.integrate(lambert_point(scene, 0, vec3(0.8f, 0, 0), vec3(0, 0, 1)), ctx, rng);
+    EXPECT_GT(rp.pilot_occluded, 0);
+    EXPECT_EQ(rp.B_t, 0.0);
 }

@@ -68,6 +68,8 @@ std::vector<std::string> FrameRenderer::trace_pixel(const FrameResult& r, int x,
         PointContext ctx;
         ctx.curvature = screen_space_curvature(hit, neighbours, count);
         ctx.eye_distance = hit.distance;
+        ctx.time = r.time_s;
+        ctx.object = hit.object;
         line("screen-space curvature k = %.5g, eye distance %.5g", ctx.curvature, ctx.eye_distance);
         const RadiancePointIntegrator integrator(rs, config.shading, config.points, bandwidth());
         CounterRng rng(uint64_t(config.frame.seed) ^ kPointsStream, uint64_t(r.frame),

@@ -11,12 +11,14 @@ namespace freqlab {
 const std::vector<std::string>& radiance_point_layer_names() {
     static const std::vector<std::string> names = {
         "B_L",   "sigma_rho", "N_omega", "sigma_V", "occlusion_ratio",
-        "t_min", "B_S",       "B_x",     "B_theta"};
+        "t_min", "B_S",       "B_x",     "B_theta", "B_t"};
     return names;
 }
 
-PointContext point_context(const GBuffer& gb, int x, int y) {
+PointContext point_context(const GBuffer& gb, int x, int y, float time) {
     PointContext ctx;
+    ctx.time = time;
+    ctx.object = gb.at(x, y).object;
     const SurfaceHit& c = gb.at(x, y);
     SurfaceHit neighbours[4];
     int count = 0;
@@ -48,7 +50,8 @@ PointsPassOutput render_points(const RayScene& scene, const GBuffer& gb, int fra
         "minimum occluder distance (Eq. 5.1; large distance when unoccluded)",
         "screen-space bandwidth B_S (Eq. 5.3)",
         "object-space spatial bandwidth B_x",
-        "object-space angular bandwidth B_theta"};
+        "object-space angular bandwidth B_theta",
+        "temporal bandwidth B_t from moving occluders (Eq. 5.14, 1/s)"};
     std::vector<Layer*> extra;
     for (size_t i = 0; i < radiance_point_layer_names().size(); ++i)
         extra.push_back(&layers.add(radiance_point_layer_names()[i], LayerKind::Continuous, 1,
@@ -76,17 +79,17 @@ PointsPassOutput render_points(const RayScene& scene, const GBuffer& gb, int fra
                     rp.variance = e.variance;
                     rp.rays = e.rays;
                 } else {
-                    rp = integrator.integrate(sp, point_context(gb, x, y), rng);
+                    rp = integrator.integrate(sp, point_context(gb, x, y, scene.time()), rng);
                 }
             } else {
                 rp.radiance = scene.scene().background(gb.view_dirs[p]);
             }
             auto fields = [&rp] {
-                return std::array<double, 9>{
+                return std::array<double, 10>{
                     rp.B_L,   rp.sigma_rho, rp.N_omega, rp.sigma_V, rp.occlusion_ratio,
-                    rp.t_min, rp.B_S,       rp.B_x,     rp.B_theta};
+                    rp.t_min, rp.B_S,       rp.B_x,     rp.B_theta, rp.B_t};
             };
-            std::array<double, 9> vals = fields();
+            std::array<double, 10> vals = fields();
             bool bad = !std::isfinite(rp.radiance.x + rp.radiance.y + rp.radiance.z) ||
                        !std::isfinite(rp.variance);
             for (double v : vals) bad |= !std::isfinite(v);

@@ -17,7 +17,7 @@ struct PointsPassOutput {
 // The layers written, in order (after `color` and `variance`).
 const std::vector<std::string>& radiance_point_layer_names();
 
-PointContext point_context(const GBuffer& gbuffer, int x, int y);
+PointContext point_context(const GBuffer& gbuffer, int x, int y, float time);
 
 PointsPassOutput render_points(const RayScene& scene, const GBuffer& gbuffer, int frame,
                                const FrameSettings& frame_settings, const ShadingSettings& shading,

@@ -113,7 +113,13 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
         glm::dvec2 q;
         glm::dvec3 p;
         double w;
+        double angular_speed;  // rad/s, relative to the receiver
     };
+    const Scene& scene = scene_.scene();
+    const glm::dvec3 receiver_velocity =
+        ctx.object >= 0 ? glm::dvec3(scene.objects[size_t(ctx.object)].animation.velocity_of(
+                              sp.position, ctx.time))
+                        : glm::dvec3(0.0);
     std::vector<Occluder> occluders;
     for (const auto& c : cast) {
         const glm::dvec3 d(c.ray.direction);
@@ -132,7 +138,14 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
         const double dist = hit.valid ? hit.distance : large_distance_;
         nearest = std::min(nearest, dist);
         const glm::dvec3 p = d * dist;  // relative to the shading point, world axes
-        occluders.push_back({q, p, w});
+        double angular_speed = 0.0;
+        if (hit.valid) {
+            const glm::dvec3 v = glm::dvec3(scene.objects[size_t(hit.object)].animation.velocity_of(
+                                     hit.position, ctx.time)) -
+                                 receiver_velocity;
+            angular_speed = glm::length(v - glm::dot(v, d) * d) / std::max(dist, 1e-9);
+        }
+        occluders.push_back({q, p, w, angular_speed});
         a_o += w;
         mean_q += w * q;
         mean_p += w * p;
@@ -168,6 +181,18 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
         say(chain, "occluder distance mu_t = %.5f, sigma_t = %.5f, mu_t - 3 sigma_t = %.5f%s", mu_t,
             sigma_t, rp.t_min, rp.t_min <= 0 ? " <= 0: nearest pilot hit used" : "");
         if (!(rp.t_min > 0)) rp.t_min = nearest;
+        // Eq. 5.14 with the same weights as Eq. 4.4.
+        double m1 = 0.0, m2 = 0.0;
+        for (const Occluder& o : occluders) {
+            const double a = o.angular_speed * rp.B_L;
+            m1 += o.w * a;
+            m2 += o.w * a * a;
+        }
+        m1 /= a_o;
+        const double sd = std::sqrt(std::max(m2 / a_o - m1 * m1, 0.0));
+        rp.B_t = m1 + 3.0 * sd;
+        say(chain, "occluders' |v'| B_L: mean %.5g, deviation %.5g -> B_t = %.5g (1/s)", m1, sd,
+            rp.B_t);
     } else {
         rp.t_min = large_distance_;
         say(chain, "no occluded pilot sample: f_V = 0, t_min = large distance %.4g", rp.t_min);

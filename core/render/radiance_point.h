@@ -21,6 +21,10 @@
 // |                 | <= 0 (spread-out occluders) the nearest pilot hit distance instead        |
 // | B_S, B_x, B_theta | 3 sqrt of the image covariance's angular variance (Eq. 5.2-5.3), and of |
 // |                 | the object-space covariance's spatial and angular variances (App. 9)    |
+// | B_t             | Eq. 5.14: mean + 3 deviations (BRDF-pdf weighted, as Eq. 4.4) of |v'| B_L |
+// |                 | over occluded pilot samples, |v'| the occluder's angular speed relative  |
+// |                 | to the receiver; 0 when nothing occluding moves (the environment is      |
+// |                 | static in the scene model, so its rotation term omega B_L is 0)          |
 // | estimate        | points.reuse_pilot off: N_Omega fresh MIS samples (the pilot only         |
 // |                 | decides, so the count cannot bias the mean); on: the seed's reuse        |
 #pragma once
@@ -39,7 +43,7 @@ struct RadiancePoint {
     float variance = 0.0f;
     long rays = 0;
     double B_L = 0.0, sigma_rho = 0.0, N_L = 0.0, N_omega = 0.0, sigma_V = 0.0;
-    double occlusion_ratio = 0.0, t_min = 0.0, B_S = 0.0, B_x = 0.0, B_theta = 0.0;
+    double occlusion_ratio = 0.0, t_min = 0.0, B_S = 0.0, B_x = 0.0, B_theta = 0.0, B_t = 0.0;
     int pilot_rays = 0, pilot_occluded = 0;
     // The pilot's samples in the cone frame (for the inspector): angular coordinates, occluded.
     struct ConeSample {
@@ -53,6 +57,8 @@ struct RadiancePoint {
 struct PointContext {
     double curvature = 0.0;     // screen-space estimate (1 / scene units)
     double eye_distance = 1.0;  // from the camera
+    float time = 0.0f;          // of the frame (for occluder velocities)
+    int object = -1;            // the receiver's object (its own motion is subtracted)
 };
 
 // |n1 - n0| / |p1 - p0| over the pixel's neighbours on the same object (the larger of x, y).

@@ -33,4 +33,11 @@ mat4 Animation::at(float time) const {
            glm::scale(mat4(1.0f), trs.scale);
 }
 
+vec3 Animation::velocity_of(const vec3& p, float t) const {
+    if (is_static()) return vec3(0.0f);
+    const float h = 1e-3f;
+    const vec4 local = glm::inverse(at(t)) * vec4(p, 1.0f);
+    return (vec3(at(t + h) * local) - vec3(at(t - h) * local)) / (2.0f * h);
+}
+
 }  // namespace freqlab

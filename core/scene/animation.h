@@ -30,6 +30,9 @@ struct Animation {
     bool is_static() const { return keys.size() < 2 && spin_rad_per_s == 0.0f; }
     // Object-to-world at time t: T * R * Spin(t) * S.
     mat4 at(float time) const;
+    // World-space velocity (units per second) at time t of the material point that is at
+    // `world_point` then: a central difference of the transform over +-1 ms.
+    vec3 velocity_of(const vec3& world_point, float time) const;
 };
 
 }  // namespace freqlab
