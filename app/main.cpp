@@ -77,6 +77,9 @@ int main(int argc, char** argv) {
     std::string gui_inspect, gui_warm, gui_session;
     bool gui_compare = false, gui_tables = false;
     gui->add_flag("--tables", gui_tables, "open the method B tables panel");
+    bool gui_env_bandwidth = false;
+    gui->add_flag("--env-bandwidth", gui_env_bandwidth,
+                  "show the environment's bandwidth hierarchy (method A) in the viewport");
     std::string tables_emitter = "point";
     gui->add_option("--tables-emitter", tables_emitter,
                     "emitter shown in the tables panel: point, directional or area");
@@ -166,6 +169,7 @@ int main(int argc, char** argv) {
         options.session = gui_session;
         options.compare = gui_compare;
         options.show_tables = gui_tables;
+        options.show_env_bandwidth = gui_env_bandwidth;
         options.tables_emitter = int(freqlab::parse_emitter(tables_emitter));
         if (!gui_inspect.empty()) {
             if (std::sscanf(gui_inspect.c_str(), "%d,%d", &options.inspect_x, &options.inspect_y) !=

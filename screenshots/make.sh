@@ -17,3 +17,6 @@ shot compare_split.png scenes/rotor.json --method mis --set mis.spp=4 --set refe
      --set frame.width=480 --set frame.height=270 --frame 0 --compare
 shot tables_panel.png builtin:default --method gbuffer --frame 0 --tables
 shot tables_panel_area.png builtin:default --method gbuffer --frame 0 --tables --tables-emitter area --size 1280x1100
+shot points_inspector.png scenes/rotor.json --method points --frame 3 --overlay N_omega --inspect 330,250 \
+     --size 1280x1000
+shot env_bandwidth.png scenes/rotor.json --method gbuffer --frame 0 --env-bandwidth --overlay "B_L r=22.5deg"

@@ -90,6 +90,27 @@ ImU32 to_u32(const vec3& c) {
     return ImGui::ColorConvertFloat4ToU32(ImVec4(c.r, c.g, c.b, 1.0f));
 }
 
+// Builds (or loads from the cache) the scene environment's bandwidth hierarchy, once.
+void start_env_bandwidth_job(Workbench::State& s) {
+    if (s.env_bandwidth_job || !s.scene.environment()) return;
+    Workbench::State* sp = &s;
+    s.env_bandwidth_job = std::make_unique<Job>([sp](Progress&) {
+        const EnvironmentMap& env = *sp->scene.environment();
+        const EnvBandwidthHierarchy h = EnvBandwidthHierarchy::cached(env);
+        auto result = std::make_unique<FrameResult>();
+        result->frame = -100;  // not a frame of the animation
+        result->layers = bandwidth_layers(env, h, 1024);
+        result->stats = {{"frame", -100},
+                         {"time_ms", 0.0},
+                         {"rays", 0},
+                         {"levels", h.levels().size()},
+                         {"env_width", h.env_width()},
+                         {"nyquist_cycles_per_rad", h.nyquist()}};
+        std::lock_guard<std::mutex> lock(sp->results_mutex);
+        sp->env_bandwidth = std::move(result);
+    });
+}
+
 void draw_settings_panel(Workbench::State& s) {
     ImGui::Text("scene: %s", s.scene.name.c_str());
     int method = int(s.config.method);
@@ -98,6 +119,12 @@ void draw_settings_panel(Workbench::State& s) {
         s.config.method = RenderMethod(method);
         restart_renderer(s);
     }
+    if (ImGui::Checkbox("view environment bandwidth", &s.show_env_bandwidth)) s.view_dirty = true;
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip(
+            "Method A's B_L hierarchy (cycles/rad) per window size over the lat-long "
+            "map, in place of the frame; pick the level as a layer.");
+    if (s.show_env_bandwidth) start_env_bandwidth_job(s);
     if (ImGui::IsItemHovered())
         ImGui::SetTooltip(
             "gbuffer: primary rays only; mis: MIS direct lighting at mis.spp; "
@@ -296,6 +323,47 @@ void draw_viewport(Workbench::State& s) {
     draw_colorbar(s, *layer, ImGui::GetCursorScreenPos(), std::min(size.x, 420.0f));
 }
 
+// The radiance point's pilot samples in its cone frame (azimuthal-equidistant: distance from
+// the centre is the angle from mu_rho): visible green, occluded red; the footprint circle; the
+// 1-sigma ellipse of the occluded samples (Eq. 4.4) about their mean.
+void draw_cone_samples(const RadiancePoint& rp) {
+    ImGui::TextDisabled("pilot samples in the BRDF cone (N_L = %.0f, N_Omega = %.0f)", rp.N_L,
+                        rp.N_omega);
+    const float size = std::min(ImGui::GetContentRegionAvail().x, 220.0f);
+    const ImVec2 o = ImGui::GetCursorScreenPos(), c(o.x + size / 2, o.y + size / 2);
+    ImDrawList* dl = ImGui::GetWindowDrawList();
+    dl->AddRectFilled(o, ImVec2(o.x + size, o.y + size), IM_COL32(24, 24, 28, 255));
+    const double extent = std::max(rp.footprint_radius * 1.25, 0.05);
+    const float scale = float(0.5 * size / extent);
+    auto at = [&](double u, double v) {
+        return ImVec2(c.x + float(u) * scale, c.y - float(v) * scale);
+    };
+    dl->AddCircle(c, float(rp.footprint_radius) * scale, IM_COL32(200, 200, 200, 200), 64, 1.0f);
+    for (const RadiancePoint::ConeSample& q : rp.cone_samples)
+        dl->AddCircleFilled(at(q.u, q.v), 2.0f,
+                            q.occluded ? IM_COL32(235, 80, 60, 255) : IM_COL32(90, 210, 110, 255));
+    if (rp.pilot_occluded > 1) {
+        // Ellipse from the eigen-decomposition of the 2x2 covariance.
+        const double a = rp.sigma_o[0], b = rp.sigma_o[1], d = rp.sigma_o[2];
+        const double tr = 0.5 * (a + d),
+                     det = std::sqrt(std::max(0.25 * (a - d) * (a - d) + b * b, 0.0));
+        const double l1 = std::sqrt(std::max(tr + det, 0.0)),
+                     l2 = std::sqrt(std::max(tr - det, 0.0));
+        const double angle = 0.5 * std::atan2(2 * b, a - d);
+        ImVec2 prev;
+        for (int i = 0; i <= 48; ++i) {
+            const double t = 2 * M_PI * i / 48, x = l1 * std::cos(t), y = l2 * std::sin(t);
+            const ImVec2 p = at(rp.mu_o[0] + x * std::cos(angle) - y * std::sin(angle),
+                                rp.mu_o[1] + x * std::sin(angle) + y * std::cos(angle));
+            if (i) dl->AddLine(prev, p, IM_COL32(255, 200, 60, 255), 1.5f);
+            prev = p;
+        }
+    }
+    ImGui::Dummy(ImVec2(size, size + 4));
+    ImGui::Text("sigma_rho %.4f rad, sigma_V %.4f rad, occluded %d / %d", rp.sigma_rho, rp.sigma_V,
+                rp.pilot_occluded, rp.pilot_rays);
+}
+
 void draw_inspector(Workbench& wb, Workbench::State& s) {
     if (!s.shown || s.pick_x < 0) {
         ImGui::TextWrapped("Click a pixel in the viewport to see every layer's value there.");
@@ -320,13 +388,18 @@ void draw_inspector(Workbench& wb, Workbench::State& s) {
     // The method's record of this pixel: its estimate re-run with every sample traced.
     ImGui::Separator();
     // One pixel is cheap to re-run; it waits while a render job owns the renderer.
-    const bool idle = !s.job || s.job->done();
+    const bool idle = (!s.job || s.job->done()) && !s.show_env_bandwidth;
     const std::pair<int, int> pick{s.pick_x, s.pick_y};
     if (s.renderer && idle && (s.trace_pixel != pick || s.trace_frame != s.shown->frame)) {
-        s.trace_lines = s.renderer->trace_pixel(*s.shown, s.pick_x, s.pick_y, 32);
+        RadiancePoint point;
+        point.footprint_radius = -1.0;  // stays negative unless a radiance point was traced
+        s.trace_lines = s.renderer->trace_pixel(*s.shown, s.pick_x, s.pick_y, 32, &point);
+        s.trace_point.reset();
+        if (point.footprint_radius >= 0.0) s.trace_point = point;
         s.trace_pixel = pick;
         s.trace_frame = s.shown->frame;
     }
+    if (s.trace_point && s.trace_pixel == pick) draw_cone_samples(*s.trace_point);
     ImGui::TextDisabled("trace of this pixel's estimate");
     if (!s.trace_lines.empty() && s.trace_pixel == pick) {
         ImGui::BeginChild("trace", ImVec2(0, 0), true, ImGuiWindowFlags_HorizontalScrollbar);
@@ -463,6 +536,7 @@ void Workbench::draw(int fb_w, int fb_h) {
             if (lb != s.results.begin()) it = std::prev(lb);
         }
         const FrameResult* r = it == s.results.end() ? nullptr : &it->second;
+        if (s.show_env_bandwidth) r = s.env_bandwidth.get();
         if (r != s.shown || (r && r->frame != s.shown_frame)) {
             s.shown = r;
             s.shown_frame = r ? r->frame : -1;
@@ -519,7 +593,9 @@ void Workbench::apply_setting(const std::string& assignment) {
 }
 
 bool Workbench::frame_shown() const {
-    return (s_->shown && s_->shown->frame == s_->frame && !s_->view_dirty) || !s_->error.empty();
+    const bool env_view = s_->show_env_bandwidth && s_->shown && s_->shown->frame == -100;
+    return (s_->shown && (s_->shown->frame == s_->frame || env_view) && !s_->view_dirty) ||
+           !s_->error.empty();
 }
 
 void Workbench::wait_for_render() {
@@ -570,6 +646,12 @@ const std::string& Workbench::error() const {
     return s_->error;
 }
 
+void Workbench::show_env_bandwidth() {
+    s_->show_env_bandwidth = true;
+    start_env_bandwidth_job(*s_);
+    if (s_->env_bandwidth_job) s_->env_bandwidth_job->wait();
+}
+
 bool Workbench::tables_ready() const {
     std::lock_guard<std::mutex> lock(s_->tables->mutex);
     return s_->tables->tables != nullptr;
@@ -608,6 +690,7 @@ int run_loop(GlHost& host, Workbench& wb, const WorkbenchOptions& options, bool 
         wb.set_frame(options.frame);
     }
     if (options.inspect_x >= 0) wb.select_pixel(options.inspect_x, options.inspect_y);
+    if (options.show_env_bandwidth) wb.show_env_bandwidth();
     if (options.show_tables)
         for (int i = 0; i < 100000 && !wb.tables_ready(); ++i) {
             render_ui_frame(host, wb);

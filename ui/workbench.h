@@ -36,7 +36,8 @@ struct WorkbenchOptions {
     std::string session;       // a session JSON to load at start (overrides the fields above)
     bool compare = false;      // render the reference of the frame and show the split view
     bool show_tables = false;  // open the method B tables panel (and wait for the tables)
-    int tables_emitter = 0;    // EmitterKind shown there first
+    bool show_env_bandwidth = false;  // the environment bandwidth hierarchy in the viewport
+    int tables_emitter = 0;           // EmitterKind shown there first
 };
 
 struct ScreenRect {
@@ -84,6 +85,7 @@ class Workbench {
     bool reference_busy() const;
     const ImageMetrics* metrics() const;
     bool tables_ready() const;  // the tables panel has its tables
+    void show_env_bandwidth();  // switches the viewport to it (waits for the hierarchy)
 
     struct State;  // defined in workbench.cpp; public so its helper functions can name it
 

@@ -7,6 +7,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -65,11 +66,16 @@ struct Workbench::State {
     bool split = false;
     float split_position = 0.5f;
     LayerView reference_view;
-    std::vector<FigureInset> insets;       // for Export > Figure
-    std::vector<std::string> trace_lines;  // the inspector's pixel trace
+    std::vector<FigureInset> insets;           // for Export > Figure
+    std::vector<std::string> trace_lines;      // the inspector's pixel trace
+    std::optional<RadiancePoint> trace_point;  // method points: the pixel's radiance point
     std::pair<int, int> trace_pixel{-1, -1};
     int trace_frame = -1;
     std::unique_ptr<TablesPanelState> tables = make_tables_panel();
+    // Method A's environment bandwidth hierarchy, shown in the viewport instead of the frame.
+    bool show_env_bandwidth = false;
+    std::unique_ptr<Job> env_bandwidth_job;
+    std::unique_ptr<FrameResult> env_bandwidth;  // guarded by results_mutex
     std::string session_path = "freqlab-out/session.json";
 };
 

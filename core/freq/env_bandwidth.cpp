@@ -16,6 +16,7 @@
 #include "base/file_io.h"
 #include "base/hash.h"
 #include "freq/brdf_footprint.h"
+#include "image/layers.h"
 #include "scene/light.h"
 
 namespace freqlab {
@@ -366,6 +367,34 @@ EnvBandwidthHierarchy EnvBandwidthHierarchy::load(const std::filesystem::path& p
     }
     if (offset != size) throw Error(file, "payload", "longer than its levels");
     return h;
+}
+
+LayerSet bandwidth_layers(const EnvironmentMap& env, const EnvBandwidthHierarchy& h, int width) {
+    const int height = std::max(width / 2, 1);
+    LayerSet layers(width, height);
+    Layer& color = layers.add("color", LayerKind::Color, 3, "the environment map (lat-long)");
+    std::vector<vec3> directions(size_t(width) * height);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const vec3 d = env.uv_to_direction(vec2((x + 0.5f) / width, (y + 0.5f) / height));
+            directions[size_t(y) * width + size_t(x)] = d;
+            const vec3 c = env.eval(d);
+            for (int k = 0; k < 3; ++k)
+                color.data[3 * (size_t(y) * width + size_t(x)) + size_t(k)] = c[k];
+        }
+    for (size_t l = 0; l < h.levels().size(); ++l) {
+        char name[48], description[160];
+        const double deg = h.levels()[l].radius * 180.0 / kPiD;
+        std::snprintf(name, sizeof name, "B_L r=%.3gdeg", deg);
+        std::snprintf(description, sizeof description,
+                      "environment bandwidth, cycles/rad, in a cos^%.3g window of radius %.3g deg "
+                      "(Nyquist %.3g)",
+                      h.levels()[l].exponent, deg, h.nyquist());
+        Layer& layer = layers.add(name, LayerKind::Continuous, 1, description);
+        for (size_t i = 0; i < directions.size(); ++i)
+            layer.data[i] = float(h.level_value(int(l), directions[i]));
+    }
+    return layers;
 }
 
 EnvBandwidthHierarchy EnvBandwidthHierarchy::cached(const EnvironmentMap& env,

@@ -79,4 +79,10 @@ class EnvBandwidthHierarchy {
     uint64_t content_hash_ = 0;
 };
 
+// The hierarchy as viewable layers on a width x width/2 lat-long grid: "color" (the map)
+// and one continuous layer "B_L r=<deg>" per level (the footprint maxima, cycles per radian).
+class LayerSet;
+LayerSet bandwidth_layers(const EnvironmentMap& env, const EnvBandwidthHierarchy& hierarchy,
+                          int width);
+
 }  // namespace freqlab

@@ -11,6 +11,7 @@
 #include "accel/ray_scene.h"
 #include "base/job.h"
 #include "freq/env_bandwidth.h"
+#include "render/radiance_point.h"
 #include "image/layers.h"
 #include "render/reference_cache.h"
 #include "settings/render_settings.h"
@@ -53,8 +54,9 @@ class FrameRenderer {
     const RayScene& ray_scene() const { return ray_scene_; }
     // The estimate of pixel (x, y) of `result` re-run with every sample traced, as text lines
     // (render/pixel_trace.cpp). Not while render() runs on another thread.
+    // For method points, `point` (when given) receives the pixel's radiance point.
     std::vector<std::string> trace_pixel(const FrameResult& result, int x, int y,
-                                         size_t max_samples = 48);
+                                         size_t max_samples = 48, RadiancePoint* point = nullptr);
 
   private:
     const Scene& scene_;

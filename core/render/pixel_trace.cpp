@@ -12,7 +12,7 @@
 namespace freqlab {
 
 std::vector<std::string> FrameRenderer::trace_pixel(const FrameResult& r, int x, int y,
-                                                    size_t max_samples) {
+                                                    size_t max_samples, RadiancePoint* point) {
     std::vector<std::string> out;
     auto line = [&out](const char* format, auto... args) {
         char buf[512];
@@ -75,7 +75,8 @@ std::vector<std::string> FrameRenderer::trace_pixel(const FrameResult& r, int x,
         CounterRng rng(uint64_t(config.frame.seed) ^ kPointsStream, uint64_t(r.frame),
                        size_t(y) * r.layers.width() + x, 0);
         std::vector<std::string> chain;
-        integrator.integrate(sp, ctx, rng, &chain);
+        const RadiancePoint rp = integrator.integrate(sp, ctx, rng, &chain);
+        if (point) *point = rp;
         out.insert(out.end(), chain.begin(), chain.end());
         return out;
     }

@@ -79,6 +79,7 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
     const glm::dvec3 mu =
         footprint.whole_hemisphere ? n : glm::dvec3(reflect_about(sp.wo, sp.shading_normal));
     const double radius = footprint.query_radius();
+    rp.footprint_radius = radius;
     rp.sigma_rho = footprint.whole_hemisphere ? kLambertSigma : std::atan(footprint.sigma);
     rp.B_L = bandwidth_ ? bandwidth_->query(vec3(mu), radius) : 0.0;
     const double b_cone = rp.B_L * 2.0 * radius;
@@ -157,17 +158,28 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
     if (rp.pilot_occluded > 0 && a_o > 0) {
         mean_q /= a_o;
         mean_p /= a_o;
+        // Weighted covariance with reliability weights. The printed Eq. 4.4 weighs squared
+        // weights by N / ((N_L - 1) A_o^2), which for equal weights is the spread divided by the
+        // number of occluded samples: sigma_V would shrink as occluders cover more of the
+        // footprint, the opposite of the coverage measure the text describes.
         glm::dmat2 sigma_q(0.0);
         glm::dmat3 sigma_p(0.0);
+        double w2_sum = 0.0;
         for (const Occluder& o : occluders) {
-            const double w2 = o.w * o.w;
-            sigma_q += w2 * glm::outerProduct(o.q - mean_q, o.q - mean_q);
-            sigma_p += w2 * glm::outerProduct(o.p - mean_p, o.p - mean_p);
+            sigma_q += o.w * glm::outerProduct(o.q - mean_q, o.q - mean_q);
+            sigma_p += o.w * glm::outerProduct(o.p - mean_p, o.p - mean_p);
+            w2_sum += o.w * o.w;
         }
-        const double norm = n_l > 1 ? double(n_l) / ((n_l - 1.0) * a_o * a_o) : 0.0;
+        const double denominator = a_o - w2_sum / a_o;
+        const double norm = denominator > 0 ? 1.0 / denominator : 0.0;
         sigma_q *= norm;
         sigma_p *= norm;
         rp.sigma_V = std::sqrt(std::max(sigma_q[0][0], sigma_q[1][1]));
+        rp.mu_o[0] = mean_q.x;
+        rp.mu_o[1] = mean_q.y;
+        rp.sigma_o[0] = sigma_q[0][0];
+        rp.sigma_o[1] = sigma_q[1][0];
+        rp.sigma_o[2] = sigma_q[1][1];
         const double x = rp.sigma_V / rp.sigma_rho;
         f_v = (n_max - n_l) * std::exp(-0.5 * (x - 0.5) * (x - 0.5));
         const double mu_t = glm::length(mean_p);

@@ -11,7 +11,9 @@
 // | B_L             | environment bandwidth (cycles/rad) queried at (mu_rho, atan(3 sigma))     |
 // | N_L             | 4 B^2 with B = B_L x the footprint's width 2 r (cycles across it),        |
 // |                 | clamped to [points.min_samples, points.max_pilot], even                 |
-// | mu_o, Sigma_o   | Eq. 4.4 over the pilot's occluded samples, weights rho_i = BRDF pdf, on   |
+// | mu_o, Sigma_o   | Eq. 4.4's mean over the pilot's occluded samples, weights rho_i = BRDF pdf,|
+// |                 | and their weighted covariance (reliability weights; the printed          |
+// |                 | normalisation divides the spread by the occluded count, see the .cpp), on |
 // |                 | the samples' angular coordinates theta (cos phi, sin phi) in the cone frame|
 // |                 | (so sigma_V compares with sigma_rho: the seed's hit points have units)    |
 // | sigma_V         | Eq. 4.5: the larger tangent / binormal deviation of Sigma_o               |
@@ -51,6 +53,9 @@ struct RadiancePoint {
         bool occluded;
     };
     std::vector<ConeSample> cone_samples;
+    double footprint_radius = 0.0;          // the query radius, rad (the inspector's circle)
+    double mu_o[2] = {0, 0};                // Eq. 4.4 mean, cone angles
+    double sigma_o[3] = {0, 0, 0};          // Eq. 4.4 covariance: tt, tb, bb
 };
 
 // Geometry of the pixel the point shades, from the G-buffer.
