@@ -29,6 +29,17 @@ struct CompareArgs {
 };
 int run_compare(const CompareArgs& args);
 
+struct BenchArgs {
+    std::string scene = "scenes/rotor.json";
+    std::string study = "points";
+    int frame = 0;
+    std::string size = "320x180";
+    int runs = 4;
+    std::vector<std::string> sets;
+    std::string out = "freqlab-out/bench";
+};
+int run_bench(const BenchArgs& args);
+
 struct FigureArgs {
     std::string input;  // an EXR written by freqlab (or any EXR)
     std::string layer = "color";

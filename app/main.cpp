@@ -142,8 +142,15 @@ int main(int argc, char** argv) {
     tables->add_option("--out", tables_out, "table file to write (default: the cache)");
     auto* bake = app.add_subcommand("bake", "lightmap / probe baking with media (to come)");
     bake->allow_extras();
-    auto* bench = app.add_subcommand("bench", "time-vs-error study (to come)");
-    bench->allow_extras();
+    freqlab::BenchArgs ba;
+    auto* bench = app.add_subcommand("bench", "rays-vs-error studies of method A against MIS");
+    bench->add_option("scene", ba.scene, "scene file");
+    bench->add_option("--study", ba.study, "points: adaptive radiance points vs fixed-N MIS");
+    bench->add_option("--frame", ba.frame, "frame");
+    bench->add_option("--size", ba.size, "WxH");
+    bench->add_option("--runs", ba.runs, "independent adaptive renders per pixel error");
+    bench->add_option("--set", ba.sets, "key=value setting (repeatable)");
+    bench->add_option("--out", ba.out, "output directory (bench_points.json)");
 
     CLI11_PARSE(app, argc, argv);
     try {
@@ -156,7 +163,7 @@ int main(int argc, char** argv) {
             return freqlab::run_tables_query(tq);
         }
         if (*bake) return not_yet("bake");
-        if (*bench) return not_yet("bench");
+        if (*bench) return freqlab::run_bench(ba);
             // `freqlab` alone, or `freqlab gui ...`
 #ifdef FREQLAB_HAS_UI
         freqlab::ui::WorkbenchOptions options;

@@ -52,6 +52,8 @@ PointsPassOutput render_points(const RayScene& scene, const GBuffer& gb, int fra
         "object-space spatial bandwidth B_x",
         "object-space angular bandwidth B_theta",
         "temporal bandwidth B_t from moving occluders (Eq. 5.14, 1/s)"};
+    Layer& ray_count =
+        layers.add("rays", LayerKind::Continuous, 1, "rays cast for the radiance point");
     std::vector<Layer*> extra;
     for (size_t i = 0; i < radiance_point_layer_names().size(); ++i)
         extra.push_back(&layers.add(radiance_point_layer_names()[i], LayerKind::Continuous, 1,
@@ -104,6 +106,7 @@ PointsPassOutput render_points(const RayScene& scene, const GBuffer& gb, int fra
                     const size_t q = size_t(yy) * w + xx;
                     for (int c = 0; c < 3; ++c) color.data[3 * q + c] = rp.radiance[c];
                     variance.data[q] = rp.variance;
+                    ray_count.data[q] = float(rp.rays);
                     for (size_t i = 0; i < extra.size(); ++i) extra[i]->data[q] = float(vals[i]);
                 }
         }

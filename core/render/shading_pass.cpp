@@ -14,6 +14,7 @@ ShadingPassOutput shade_pixels(const RayScene& scene, const GBuffer& gb, int fra
     Layer& color = layers.add("color", LayerKind::Color, 3, "direct lighting, MIS estimate");
     Layer& variance = layers.add("variance", LayerKind::Continuous, 1,
                                  "variance of the pixel's luminance estimate");
+    Layer& ray_count = layers.add("rays", LayerKind::Continuous, 1, "rays cast for the pixel");
     const int w = gb.width, h = gb.height;
     const int rows_per_task = 4;
     const int tasks = (h + rows_per_task - 1) / rows_per_task;
@@ -40,6 +41,7 @@ ShadingPassOutput shade_pixels(const RayScene& scene, const GBuffer& gb, int fra
                 }
                 for (int c = 0; c < 3; ++c) color.data[3 * p + c] = e.radiance[c];
                 variance.data[p] = e.variance;
+                ray_count.data[p] = float(e.rays);
                 task_rays += e.rays;
             }
         rays.fetch_add(task_rays, std::memory_order_relaxed);

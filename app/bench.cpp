@@ -1,0 +1,146 @@
+// `freqlab bench SCENE --study points`: method A's adaptive radiance points against the fixed-N
+// MIS baseline at equal per-pixel error (issue "Method A, part 1", acceptance 6).
+//
+// Per pixel i (hits only): the adaptive estimate's mean squared error against the reference over
+// --runs independent seeds (minus the reference's own variance), its mean ray count; the MIS
+// estimator's per-sample variance v_i and rays per sample r_i from one 64-spp render. MIS reaches
+// the adaptive error at N_i = v_i / MSE_i samples, so with rays N_i r_i. Reported:
+//   - per pixel: adaptive rays / MIS rays at equal error (median, quartiles);
+//   - fixed N (one count for every pixel, as the baseline renders): the N that reaches the
+//     adaptive error on 50 / 90 / 95 % of the pixels, and its total rays over the adaptive's.
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include <nlohmann/json.hpp>
+
+#include "base/error.h"
+#include "base/file_io.h"
+#include "commands.h"
+#include "render/frame_renderer.h"
+#include "scene/scene_loader.h"
+
+namespace freqlab {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+double percentile(std::vector<double> v, double q) {
+    if (v.empty()) return NAN;
+    std::sort(v.begin(), v.end());
+    const double at = q * (v.size() - 1);
+    const size_t i = size_t(at);
+    const double f = at - double(i);
+    return i + 1 < v.size() ? (1 - f) * v[i] + f * v[i + 1] : v[i];
+}
+
+}  // namespace
+
+int run_bench(const BenchArgs& a) {
+    if (a.study != "points")
+        throw Error("--study", a.study, "expected points (the only study so far)");
+    if (a.runs < 1) throw Error("--runs", std::to_string(a.runs), "expected at least 1");
+    if (a.out.empty()) throw Error("--out", "", "expected an output directory");
+    const Scene scene = load_scene(a.scene);
+    const auto [w, h] = parse_size(a.size, "--size");
+    if (a.frame < 0 || a.frame >= scene.frame_count)
+        throw Error("--frame", std::to_string(a.frame), "expected a frame of the scene");
+    EmbreeDevice device(0);
+    auto config_for = [&](RenderMethod method, int seed) {
+        RenderConfig c;
+        c.method = method;
+        SettingsGroup g = c.settings_group();
+        for (const std::string& s : a.sets) g.apply_assignment(s);
+        c.frame.width = w;
+        c.frame.height = h;
+        c.frame.seed = seed;
+        c.mis.spp = 64;
+        return c;
+    };
+    Progress progress;
+    auto render = [&](const RenderConfig& c) {
+        FrameRenderer renderer(scene, c, device);
+        return renderer.render(a.frame, progress);
+    };
+    std::fprintf(stderr, "reference...\n");
+    const FrameResult ref = render(config_for(RenderMethod::Reference, 0));
+    std::fprintf(stderr, "MIS 64 spp...\n");
+    const FrameResult mis = render(config_for(RenderMethod::Mis, 1));
+    std::vector<FrameResult> adaptive;
+    for (int k = 0; k < a.runs; ++k) {
+        std::fprintf(stderr, "adaptive points, run %d/%d...\n", k + 1, a.runs);
+        adaptive.push_back(render(config_for(RenderMethod::Points, 100 + k)));
+    }
+    const size_t n = size_t(w) * h;
+    const Layer& ref_color = ref.layers.get("color");
+    const Layer& ref_var = ref.layers.get("variance");
+    const Layer& mis_var = mis.layers.get("variance");
+    const Layer& mis_rays = mis.layers.get("rays");
+    const Layer& depth = ref.layers.get("depth");
+    std::vector<double> ratio, needed_n, mse_a, rays_a_all, rays_per_sample;
+    double total_rays_a = 0, total_rays_per_sample = 0;
+    for (size_t i = 0; i < n; ++i) {
+        if (!(depth.data[i] > 0) || !std::isfinite(depth.data[i])) continue;  // background
+        const double r_i = mis_rays.data[i] / 64.0, v_i = mis_var.data[i] * 64.0;
+        if (!(r_i > 0) || !(v_i > 0)) continue;  // nothing to estimate (mirrors, unlit)
+        const double lum_ref = 0.2126 * ref_color.data[3 * i] + 0.7152 * ref_color.data[3 * i + 1] +
+                               0.0722 * ref_color.data[3 * i + 2];
+        double se = 0, rays = 0;
+        for (const FrameResult& r : adaptive) {
+            const Layer& c = r.layers.get("color");
+            const double lum =
+                0.2126 * c.data[3 * i] + 0.7152 * c.data[3 * i + 1] + 0.0722 * c.data[3 * i + 2];
+            se += (lum - lum_ref) * (lum - lum_ref);
+            rays += r.layers.get("rays").data[i];
+        }
+        se = std::max(se / a.runs - ref_var.data[i], 1e-3 * v_i / 1024.0);
+        rays /= a.runs;
+        const double n_i = v_i / se;
+        needed_n.push_back(n_i);
+        rays_per_sample.push_back(r_i);
+        ratio.push_back(rays / (n_i * r_i));
+        mse_a.push_back(se);
+        rays_a_all.push_back(rays);
+        total_rays_a += rays;
+        total_rays_per_sample += r_i;
+    }
+    if (ratio.empty()) throw Error(a.scene, "pixels", "no pixel with a surface to compare");
+    json fixed = json::object();
+    for (double q : {0.5, 0.9, 0.95}) {
+        const double n_q = std::ceil(percentile(needed_n, q));
+        fixed[std::to_string(int(q * 100))] = {
+            {"spp", n_q},
+            {"rays", n_q * total_rays_per_sample},
+            {"rays_over_adaptive", n_q * total_rays_per_sample / total_rays_a}};
+    }
+    const json report = {
+        {"scene", a.scene},
+        {"frame", a.frame},
+        {"size", a.size},
+        {"runs", a.runs},
+        {"pixels", ratio.size()},
+        {"adaptive_rays_total", total_rays_a},
+        {"adaptive_rays_per_pixel_median", percentile(rays_a_all, 0.5)},
+        {"per_pixel_adaptive_over_mis_rays",
+         {{"p25", percentile(ratio, 0.25)},
+          {"median", percentile(ratio, 0.5)},
+          {"p75", percentile(ratio, 0.75)}}},
+        {"mis_spp_needed_per_pixel",
+         {{"median", percentile(needed_n, 0.5)}, {"p90", percentile(needed_n, 0.9)}}},
+        {"fixed_n_mis_reaching_adaptive_error_on_pct_of_pixels", fixed},
+        {"settings", config_for(RenderMethod::Points, 0).settings_group().to_json()}};
+    std::error_code ec;
+    fs::create_directories(a.out, ec);
+    write_text_atomically(fs::path(a.out) / "bench_points.json", report.dump(2) + "\n");
+    std::cout << report.dump(2) << std::endl;
+    return 0;
+}
+
+}  // namespace freqlab
