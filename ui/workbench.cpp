@@ -114,7 +114,7 @@ void start_env_bandwidth_job(Workbench::State& s) {
 void draw_settings_panel(Workbench::State& s) {
     ImGui::Text("scene: %s", s.scene.name.c_str());
     int method = int(s.config.method);
-    const char* methods = "gbuffer\0mis\0reference\0points\0";
+    const char* methods = "gbuffer\0mis\0reference\0points\0sparse\0";
     if (ImGui::Combo("method", &method, methods) && method != int(s.config.method)) {
         s.config.method = RenderMethod(method);
         restart_renderer(s);

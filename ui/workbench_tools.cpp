@@ -271,7 +271,7 @@ void Workbench::load_session(const std::string& path) {
     if (r.get("freqlab_session").integer_in(1, 1) != 1) r.fail("unsupported session version");
     WorkbenchOptions o = s_->options;
     o.scene = r.get("scene").string();
-    o.method = r.get("method").one_of({"gbuffer", "mis", "reference", "points"});
+    o.method = r.get("method").one_of({"gbuffer", "mis", "reference", "points", "sparse"});
     o.frame = r.get("frame").integer_in(0, 1 << 30);
     o.layer = r.get("layer").string();
     o.settings.clear();

@@ -7,6 +7,7 @@
 #include "render/gbuffer.h"
 #include "render/points_pass.h"
 #include "render/shading_pass.h"
+#include "render/sparse_pass.h"
 
 namespace freqlab {
 
@@ -27,13 +28,13 @@ const std::vector<std::string>& render_method_names() {
 
 RenderMethod parse_render_method(const std::string& name) {
     const auto& names = render_method_names();
-    // gbuffer, mis, reference and points exist; the others arrive with method A's issues.
+    // All but the cache exist; it arrives with method A's third issue.
     for (size_t i = 0; i < names.size(); ++i) {
         if (name != names[i]) continue;
-        if (i <= 3) return RenderMethod(i);
+        if (i <= 4) return RenderMethod(i);
         throw Error("--method", name,
                     "this method is not implemented yet (it lands with its issue); the "
-                    "implemented methods are: gbuffer, mis, reference, points");
+                    "implemented methods are: gbuffer, mis, reference, points, sparse");
     }
     std::string list;
     for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
@@ -48,6 +49,7 @@ SettingsGroup RenderConfig::settings_group() {
     g.bind(MisSettings::schema(), &mis);
     g.bind(ReferenceSettings::schema(), &reference);
     g.bind(PointsSettings::schema(), &points);
+    g.bind(SparseSettings::schema(), &sparse);
     return g;
 }
 
@@ -58,6 +60,7 @@ int RenderConfig::spp() const {
         case RenderMethod::Reference:
             return reference.spp;
         case RenderMethod::Points:
+        case RenderMethod::Sparse:
             return points.max_samples;
         default:
             return 0;
@@ -122,6 +125,7 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
     stages["gbuffer"] = ms_since(t0);
     result.layers = std::move(gb.layers);
     long rays = gb.rays, guarded = 0;
+    nlohmann::json sparse_stats;
 
     if (config_.method == RenderMethod::Mis || config_.method == RenderMethod::Reference) {
         t0 = Clock::now();
@@ -142,6 +146,18 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
         stages["radiance_points"] = ms_since(t0);
         rays += out.rays;
         guarded = out.nonfinite;
+    } else if (config_.method == RenderMethod::Sparse) {
+        t0 = Clock::now();
+        const EnvBandwidthHierarchy* bw = bandwidth();
+        stages["env_bandwidth"] = ms_since(t0);
+        SparsePassOutput out =
+            render_sparse(ray_scene_, gb.gbuffer, frame, config_.frame, config_.shading,
+                          config_.points, config_.sparse, bw, result.layers, progress);
+        for (const auto& [key, value] : out.stats["stages"].items()) stages[key] = value;
+        out.stats.erase("stages");
+        sparse_stats = std::move(out.stats);
+        rays += out.rays;
+        guarded = out.nonfinite;
     }
 
     const long nonfinite = count_nonfinite(result.layers) + guarded;
@@ -159,6 +175,7 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
         {"pixels_shaded", long(result.layers.pixel_count())},
         {"nonfinite", nonfinite},
     };
+    for (const auto& [key, value] : sparse_stats.items()) result.stats[key] = value;
     return result;
 }
 

@@ -11,12 +11,13 @@
 #include "accel/ray_scene.h"
 #include "base/job.h"
 #include "freq/env_bandwidth.h"
-#include "render/radiance_point.h"
 #include "image/layers.h"
+#include "render/radiance_point.h"
 #include "render/reference_cache.h"
 #include "settings/render_settings.h"
 #include "settings/settings_group.h"
 #include "settings/shading_settings.h"
+#include "settings/sparse_settings.h"
 
 namespace freqlab {
 
@@ -33,6 +34,7 @@ struct RenderConfig {
     MisSettings mis;
     ReferenceSettings reference;
     PointsSettings points;
+    SparseSettings sparse;
     int spp() const;  // the sample count of the chosen method (0 for gbuffer)
     // Methods with state across frames (method A's cache) must render frames in order.
     bool needs_previous_frames() const { return method == RenderMethod::Cache; }

@@ -235,19 +235,42 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
     say(chain, "estimate (%.6g, %.6g, %.6g), variance %.4g, %ld rays in all", rp.radiance.x,
         rp.radiance.y, rp.radiance.z, rp.variance, rp.rays);
 
-    // Bandwidths (Eq. 5.2-5.3, Appendix 9).
+    const PointBandwidths bands = bandwidths(sp, ctx, rp.B_L, rp.t_min, chain);
+    rp.B_S = bands.B_S;
+    rp.B_x = bands.B_x;
+    rp.B_theta = bands.B_theta;
+    return rp;
+}
+
+double RadiancePointIntegrator::environment_bandwidth(const ShadingPoint& sp) const {
+    const BrdfFootprint footprint = brdf_footprint(*sp.material);
+    const glm::dvec3 mu = footprint.whole_hemisphere
+                              ? glm::dvec3(sp.shading_normal)
+                              : glm::dvec3(reflect_about(sp.wo, sp.shading_normal));
+    return bandwidth_ ? bandwidth_->query(vec3(mu), footprint.query_radius()) : 0.0;
+}
+
+PointBandwidths RadiancePointIntegrator::bandwidths(const ShadingPoint& sp, const PointContext& ctx,
+                                                    double B_L, double t_min,
+                                                    std::vector<std::string>* chain) const {
+    // Eq. 5.2-5.3 and Appendix 9.
+    const BrdfFootprint footprint = brdf_footprint(*sp.material);
+    const glm::dvec3 n(sp.shading_normal), wo(sp.wo);
+    const glm::dvec3 mu =
+        footprint.whole_hemisphere ? n : glm::dvec3(reflect_about(sp.wo, sp.shading_normal));
     CovarianceInputs in;
-    in.sigma_l2 = (rp.B_L / 3.0) * (rp.B_L / 3.0);
+    in.sigma_l2 = (B_L / 3.0) * (B_L / 3.0);
     in.cos_in = std::max(glm::dot(n, mu), 0.05);
     in.curvature = ctx.curvature;
-    in.b = phong_bandwidth_b(phong_like_exponent(material));
+    in.b = phong_bandwidth_b(phong_like_exponent(*sp.material));
     in.inv_cos_view = 1.0 / std::max(glm::dot(n, wo), 0.05);
     in.eye_distance = ctx.eye_distance;
-    in.t_min = rp.t_min;
+    in.t_min = t_min;
     const CovarianceResult cov = occluded_covariance_limit(in);
-    rp.B_S = 3.0 * std::sqrt(std::max(cov.image[1][1], 0.0));
-    rp.B_x = 3.0 * std::sqrt(std::max(cov.object[0][0], 0.0));
-    rp.B_theta = 3.0 * std::sqrt(std::max(cov.object[1][1], 0.0));
+    PointBandwidths out;
+    out.B_S = 3.0 * std::sqrt(std::max(cov.image[1][1], 0.0));
+    out.B_x = 3.0 * std::sqrt(std::max(cov.object[0][0], 0.0));
+    out.B_theta = 3.0 * std::sqrt(std::max(cov.object[1][1], 0.0));
     say(chain,
         "covariance inputs: sigma_L^2 = %.5g, c_i = %.4f, k = %.4g, b = %.5g, c_v = %.4f, d = "
         "%.5g, "
@@ -262,9 +285,9 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
         say_matrix(chain, "Sigma^o (object)", cov.object);
         say_matrix(chain, "Sigma (image)", cov.image);
     }
-    say(chain, "B_S = 3 sqrt(Sigma_theta) = %.5g, B_x = %.5g, B_theta = %.5g", rp.B_S, rp.B_x,
-        rp.B_theta);
-    return rp;
+    say(chain, "B_S = 3 sqrt(Sigma_theta) = %.5g, B_x = %.5g, B_theta = %.5g", out.B_S, out.B_x,
+        out.B_theta);
+    return out;
 }
 
 }  // namespace freqlab

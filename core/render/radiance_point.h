@@ -53,9 +53,9 @@ struct RadiancePoint {
         bool occluded;
     };
     std::vector<ConeSample> cone_samples;
-    double footprint_radius = 0.0;          // the query radius, rad (the inspector's circle)
-    double mu_o[2] = {0, 0};                // Eq. 4.4 mean, cone angles
-    double sigma_o[3] = {0, 0, 0};          // Eq. 4.4 covariance: tt, tb, bb
+    double footprint_radius = 0.0;  // the query radius, rad (the inspector's circle)
+    double mu_o[2] = {0, 0};        // Eq. 4.4 mean, cone angles
+    double sigma_o[3] = {0, 0, 0};  // Eq. 4.4 covariance: tt, tb, bb
 };
 
 // Geometry of the pixel the point shades, from the G-buffer.
@@ -69,6 +69,10 @@ struct PointContext {
 // |n1 - n0| / |p1 - p0| over the pixel's neighbours on the same object (the larger of x, y).
 double screen_space_curvature(const SurfaceHit& centre, const SurfaceHit* neighbours, int count);
 
+struct PointBandwidths {
+    double B_S = 0.0, B_x = 0.0, B_theta = 0.0;
+};
+
 class RadiancePointIntegrator {
   public:
     // `bandwidth` may be null (no environment map: B_L = 0).
@@ -78,6 +82,13 @@ class RadiancePointIntegrator {
     RadiancePoint integrate(const ShadingPoint& point, const PointContext& context, CounterRng& rng,
                             std::vector<std::string>* chain = nullptr) const;
     const DirectLighting& lighting() const { return lighting_; }
+    // B_L in the point's BRDF footprint (cycles/rad; 0 without an environment).
+    double environment_bandwidth(const ShadingPoint& point) const;
+    // The covariance chain alone (Eq. 5.2-5.3) for given B_L and t_min: what the sparse
+    // pipeline evaluates at every pixel from upsampled visibility statistics.
+    PointBandwidths bandwidths(const ShadingPoint& point, const PointContext& context, double B_L,
+                               double t_min, std::vector<std::string>* chain = nullptr) const;
+    double large_distance() const { return large_distance_; }
 
   private:
     const RayScene& scene_;

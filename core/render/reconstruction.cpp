@@ -1,0 +1,77 @@
+#include "render/reconstruction.h"
+
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <cmath>
+
+namespace freqlab {
+
+ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSettings& s) {
+    const int w = in.width, h = in.height;
+    const size_t n = size_t(w) * h;
+    ReconstructionOutput out;
+    out.value.assign(n, vec3(0.0f));
+    out.weight.assign(n, 0.0f);
+    out.radius_used.assign(n, 0.0f);
+    out.fallback.assign(n, 0);
+    const float kp = 1.0f / (2.0f * s.sigma_position * s.sigma_position);
+    const float kn = 1.0f / (2.0f * s.sigma_normal * s.sigma_normal);
+    const float km = 1.0f / (2.0f * s.sigma_mu_v * s.sigma_mu_v);
+    const float ks = 1.0f / (2.0f * s.sigma_sigma_v * s.sigma_sigma_v);
+    std::atomic<long> fallbacks{0};
+    // 16 x 16 tiles (seed §7), rows of tiles in parallel; each pixel reads only the inputs.
+    const int tiles_y = (h + 15) / 16;
+    tbb::parallel_for(0, tiles_y, [&](int ty) {
+        long local_fallbacks = 0;
+        for (int y = ty * 16; y < std::min(h, ty * 16 + 16); ++y)
+            for (int x = 0; x < w; ++x) {
+                const size_t i = size_t(y) * w + x;
+                const PixelFeature& fi = in.features[i];
+                if (!fi.valid) continue;
+                const float reach = std::max(fi.footprint, 1e-12f);
+                float r = std::clamp(in.radius[i], 1.0f, s.f_max);
+                for (;;) {
+                    const int ri = int(std::ceil(r));
+                    double sum_w = 0.0;
+                    glm::dvec3 acc(0.0);
+                    for (int yy = std::max(0, y - ri); yy <= std::min(h - 1, y + ri); ++yy)
+                        for (int xx = std::max(0, x - ri); xx <= std::min(w - 1, x + ri); ++xx) {
+                            const size_t j = size_t(yy) * w + xx;
+                            if (!in.sampled[j]) continue;
+                            const PixelFeature& fj = in.features[j];
+                            if (fj.object != fi.object) continue;
+                            const float dx = float(xx - x), dy = float(yy - y);
+                            if (dx * dx + dy * dy > r * r) continue;
+                            const float dp = glm::length(fi.position - fj.position) / reach;
+                            const float dn2 =
+                                glm::dot(fi.normal - fj.normal, fi.normal - fj.normal);
+                            const float dm = in.mu_v[i] - in.mu_v[j],
+                                        ds = in.sigma_v[i] - in.sigma_v[j];
+                            const double weight =
+                                std::exp(-(dp * dp * kp + dn2 * kn + dm * dm * km + ds * ds * ks));
+                            sum_w += weight;
+                            acc += weight * glm::dvec3(in.value[j]);
+                        }
+                    if (sum_w > 1e-6) {
+                        out.value[i] = vec3(acc / sum_w);
+                        out.weight[i] = float(sum_w);
+                        out.radius_used[i] = r;
+                        break;
+                    }
+                    if (r >= 4.0f * s.f_max) {
+                        out.fallback[i] = 1;
+                        out.radius_used[i] = r;
+                        ++local_fallbacks;
+                        break;
+                    }
+                    r = std::min(2.0f * r, 4.0f * s.f_max);
+                }
+            }
+        fallbacks.fetch_add(local_fallbacks, std::memory_order_relaxed);
+    });
+    out.fallback_pixels = fallbacks.load();
+    return out;
+}
+
+}  // namespace freqlab

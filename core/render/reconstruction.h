@@ -1,0 +1,38 @@
+// Method A's image reconstruction (seed, Premier article §6, Eq. 6.1-6.2): each pixel's shading
+// is the normalised cross-bilateral sum of the radiance points around it on the same object,
+// with features {p, n, mu_v, sigma_v}; textures multiply afterwards (the caller demodulates the
+// samples by their texture value and remodulates the result).
+//
+// | parameter | meaning                                                                      |
+// |-----------|------------------------------------------------------------------------------|
+// | radius    | per pixel, 2 / sqrt(density) clamped to [1, f_max]: about two sample spacings |
+// | weights   | exp(-sum_f |f_i - f_p|^2 / (2 sigma_f^2)); distance in pixel footprints       |
+// | fallback  | no weight above 1e-6: the radius doubles (up to 4 f_max); still none: the     |
+// |           | pixel is reported and the caller shades it (never black, never NaN)          |
+#pragma once
+
+#include <vector>
+
+#include "render/sparse_sampling.h"
+
+namespace freqlab {
+
+struct ReconstructionInput {
+    int width = 0, height = 0;
+    std::vector<PixelFeature> features;
+    std::vector<float> mu_v, sigma_v;  // per pixel (measured where sampled, upsampled elsewhere)
+    std::vector<float> radius;         // per pixel, px
+    std::vector<char> sampled;         // per pixel
+    std::vector<vec3> value;           // per pixel, read where sampled (demodulated)
+};
+
+struct ReconstructionOutput {
+    std::vector<vec3> value;
+    std::vector<float> weight, radius_used;
+    std::vector<char> fallback;  // no usable neighbour even at 4 f_max
+    long fallback_pixels = 0;
+};
+
+ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSettings& settings);
+
+}  // namespace freqlab

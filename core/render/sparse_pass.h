@@ -1,0 +1,38 @@
+// `--method sparse`: method A's frame pipeline without the cache (seed, Premier article
+// Algorithm 1 minus its cache steps, §5.1, §6):
+//   G-buffer -> uniform initial radiance points (sparse.initial_stride) -> bilateral upsampling of
+//   their visibility statistics {occluded, log t_min, mu_v, sigma_v} -> per-pixel B_S from the
+//   covariance chain with the pixel's own geometry -> density -> rejection sampling -> adaptive
+//   radiance points at the chosen pixels -> cross-bilateral reconstruction of the demodulated
+//   shading -> texture x shading.
+// Perfect mirrors are always sampled (density 1): their reflections are followed, not filtered.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "freq/env_bandwidth.h"
+#include "render/gbuffer.h"
+#include "render/radiance_point.h"
+#include "settings/sparse_settings.h"
+
+namespace freqlab {
+
+struct SparsePassOutput {
+    long rays = 0;
+    long nonfinite = 0;
+    nlohmann::json
+        stats;  // pixels_initial, pixels_adaptive, pixels_shaded, fallback_pixels, stage ms
+};
+
+SparsePassOutput render_sparse(const RayScene& scene, const GBuffer& gbuffer, int frame,
+                               const FrameSettings& frame_settings, const ShadingSettings& shading,
+                               const PointsSettings& points, const SparseSettings& sparse,
+                               const EnvBandwidthHierarchy* bandwidth, LayerSet& layers,
+                               Progress& progress);
+
+// The `sampled` layer's categories.
+enum class SampleKind : int { None = 0, Initial = 1, Adaptive = 2, Fallback = 3 };
+
+constexpr uint64_t kSparseStream = 0x5350415253ULL;  // "SPARS": rejection sampling
+
+}  // namespace freqlab

@@ -1,0 +1,63 @@
+#include "render/sparse_sampling.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace freqlab {
+
+double sampling_density(double B_S, double radians_per_pixel, const SparseSettings& s) {
+    const double b_min = 1.0 / (2.0 * s.f_max);
+    const double d = B_S * radians_per_pixel * s.density_scale;
+    return std::isfinite(d) ? std::clamp(d, b_min, 1.0) : 1.0;
+}
+
+bool rejection_sample(double density, CounterRng& rng) {
+    return double(rng.next_float()) < density;
+}
+
+void upsample_statistics(int w, int h, const std::vector<PixelFeature>& f,
+                         const std::vector<int>& sources,
+                         const std::vector<VisibilityStats>& values, int stride,
+                         std::vector<VisibilityStats>& out, std::vector<char>& found) {
+    out.assign(size_t(w) * h, VisibilityStats{});
+    found.assign(size_t(w) * h, 0);
+    // Sources by pixel for windowed lookups.
+    std::vector<int> source_at(size_t(w) * h, -1);
+    for (size_t k = 0; k < sources.size(); ++k) source_at[size_t(sources[k])] = int(k);
+    const int radius = 2 * stride;
+    const float inv_s2 = 1.0f / (2.0f * float(stride) * float(stride));
+    tbb::parallel_for(0, h, [&](int y) {
+        for (int x = 0; x < w; ++x) {
+            const size_t i = size_t(y) * w + x;
+            const PixelFeature& fi = f[i];
+            if (!fi.valid) continue;
+            double sum_w = 0.0;
+            std::array<double, kUpsampledStats> acc{};
+            for (int yy = std::max(0, y - radius); yy <= std::min(h - 1, y + radius); ++yy)
+                for (int xx = std::max(0, x - radius); xx <= std::min(w - 1, x + radius); ++xx) {
+                    const size_t j = size_t(yy) * w + xx;
+                    const int k = source_at[j];
+                    if (k < 0 || f[j].object != fi.object) continue;
+                    const float dx = float(xx - x), dy = float(yy - y);
+                    const float dn2 = glm::dot(fi.normal - f[j].normal, fi.normal - f[j].normal);
+                    const float reach = std::max(fi.footprint * float(stride), 1e-12f);
+                    const float dp = glm::length(fi.position - f[j].position) / reach;
+                    const double weight = std::exp(-(dx * dx + dy * dy) * inv_s2 -
+                                                   dn2 / (2.0f * 0.0625f) - 0.5f * dp * dp);
+                    if (!(weight > 1e-8)) continue;
+                    sum_w += weight;
+                    for (int c = 0; c < kUpsampledStats; ++c)
+                        acc[size_t(c)] += weight * values[size_t(k)][size_t(c)];
+                }
+            if (sum_w > 0) {
+                found[i] = 1;
+                for (int c = 0; c < kUpsampledStats; ++c)
+                    out[i][size_t(c)] = float(acc[size_t(c)] / sum_w);
+            }
+        }
+    });
+}
+
+}  // namespace freqlab
