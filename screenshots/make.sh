@@ -20,3 +20,5 @@ shot tables_panel_area.png builtin:default --method gbuffer --frame 0 --tables -
 shot points_inspector.png scenes/rotor.json --method points --frame 3 --overlay N_omega --inspect 330,250 \
      --size 1280x1000
 shot env_bandwidth.png scenes/rotor.json --method gbuffer --frame 0 --env-bandwidth --overlay "B_L r=22.5deg"
+shot sparse_density.png scenes/rotor.json --method sparse --frame 0 --overlay density
+shot sparse_sampled.png scenes/rotor.json --method sparse --frame 0 --overlay sampled

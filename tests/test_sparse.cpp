@@ -32,6 +32,7 @@ TEST(SparseSampling, RejectionSamplerEndsAreExactAndItsRateMatches) {
         EXPECT_LE(std::fabs(hits - n * d), 3 * sigma) << "density " << d;
     }
     SparseSettings s;  // f_max = 8: B_min = 1/16
+    s.density_scale = 1.0f;
     EXPECT_DOUBLE_EQ(sampling_density(0.0, 1e-3, s), 1.0 / 16);
     EXPECT_DOUBLE_EQ(sampling_density(1e6, 1e-3, s), 1.0);
     EXPECT_DOUBLE_EQ(sampling_density(300.0, 1e-3, s), 0.3);

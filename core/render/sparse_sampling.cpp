@@ -23,9 +23,14 @@ void upsample_statistics(int w, int h, const std::vector<PixelFeature>& f,
                          std::vector<VisibilityStats>& out, std::vector<char>& found) {
     out.assign(size_t(w) * h, VisibilityStats{});
     found.assign(size_t(w) * h, 0);
-    // Sources by pixel for windowed lookups.
-    std::vector<int> source_at(size_t(w) * h, -1);
-    for (size_t k = 0; k < sources.size(); ++k) source_at[size_t(sources[k])] = int(k);
+    // Sources bucketed into stride x stride cells: a window visits ~25 cells, not (4 stride)^2
+    // pixels.
+    const int cw = (w + stride - 1) / stride, ch = (h + stride - 1) / stride;
+    std::vector<std::vector<int>> cells(size_t(cw) * ch);
+    for (size_t k = 0; k < sources.size(); ++k) {
+        const int sx = sources[k] % w, sy = sources[k] / w;
+        cells[size_t(sy / stride) * cw + size_t(sx / stride)].push_back(int(k));
+    }
     const int radius = 2 * stride;
     const float inv_s2 = 1.0f / (2.0f * float(stride) * float(stride));
     tbb::parallel_for(0, h, [&](int y) {
@@ -35,22 +40,27 @@ void upsample_statistics(int w, int h, const std::vector<PixelFeature>& f,
             if (!fi.valid) continue;
             double sum_w = 0.0;
             std::array<double, kUpsampledStats> acc{};
-            for (int yy = std::max(0, y - radius); yy <= std::min(h - 1, y + radius); ++yy)
-                for (int xx = std::max(0, x - radius); xx <= std::min(w - 1, x + radius); ++xx) {
-                    const size_t j = size_t(yy) * w + xx;
-                    const int k = source_at[j];
-                    if (k < 0 || f[j].object != fi.object) continue;
-                    const float dx = float(xx - x), dy = float(yy - y);
-                    const float dn2 = glm::dot(fi.normal - f[j].normal, fi.normal - f[j].normal);
-                    const float reach = std::max(fi.footprint * float(stride), 1e-12f);
-                    const float dp = glm::length(fi.position - f[j].position) / reach;
-                    const double weight = std::exp(-(dx * dx + dy * dy) * inv_s2 -
-                                                   dn2 / (2.0f * 0.0625f) - 0.5f * dp * dp);
-                    if (!(weight > 1e-8)) continue;
-                    sum_w += weight;
-                    for (int c = 0; c < kUpsampledStats; ++c)
-                        acc[size_t(c)] += weight * values[size_t(k)][size_t(c)];
-                }
+            for (int cy = std::max(0, (y - radius) / stride);
+                 cy <= std::min(ch - 1, (y + radius) / stride); ++cy)
+                for (int cx = std::max(0, (x - radius) / stride);
+                     cx <= std::min(cw - 1, (x + radius) / stride); ++cx)
+                    for (int k : cells[size_t(cy) * cw + size_t(cx)]) {
+                        const size_t j = size_t(sources[size_t(k)]);
+                        const int xx = int(j % size_t(w)), yy = int(j / size_t(w));
+                        if (std::abs(xx - x) > radius || std::abs(yy - y) > radius) continue;
+                        if (f[j].object != fi.object) continue;
+                        const float dx = float(xx - x), dy = float(yy - y);
+                        const float dn2 =
+                            glm::dot(fi.normal - f[j].normal, fi.normal - f[j].normal);
+                        const float reach = std::max(fi.footprint * float(stride), 1e-12f);
+                        const float dp = glm::length(fi.position - f[j].position) / reach;
+                        const double weight = std::exp(-(dx * dx + dy * dy) * inv_s2 -
+                                                       dn2 / (2.0f * 0.0625f) - 0.5f * dp * dp);
+                        if (!(weight > 1e-8)) continue;
+                        sum_w += weight;
+                        for (int c = 0; c < kUpsampledStats; ++c)
+                            acc[size_t(c)] += weight * values[size_t(k)][size_t(c)];
+                    }
             if (sum_w > 0) {
                 found[i] = 1;
                 for (int c = 0; c < kUpsampledStats; ++c)

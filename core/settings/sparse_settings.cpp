@@ -15,7 +15,8 @@ const SettingsSchema& SparseSettings::schema() {
             .field(&SparseSettings::density_scale, "density_scale", 0.01, 100, "",
                    kInvalidatesShading,
                    "Multiplies the screen-space bandwidth (cycles per pixel) before it is clamped "
-                   "to [B_min, 1] as the sampling density.")
+                   "to [B_min, 1] as the sampling density. 0.5 by default: at 1280x720 it shades "
+                   "24-30 % of rotor/truck with RMSE half that of points at every pixel.")
             .field(&SparseSettings::sigma_position, "sigma_position", 0.01, 100, "px footprints",
                    kInvalidatesShading,
                    "Cross-bilateral sigma of the world-space distance, in units of the pixel's "

@@ -9,7 +9,7 @@ namespace freqlab {
 struct SparseSettings {
     int initial_stride = 8;       // the uniform initial radiance points, every k-th pixel
     float f_max = 8.0f;           // maximum reconstruction radius (px); B_min = 1 / (2 f_max)
-    float density_scale = 1.0f;   // multiplies B_S (cycles per pixel) before clamping
+    float density_scale = 0.5f;   // multiplies B_S (cycles per pixel) before clamping (calibrated)
     float sigma_position = 2.0f;  // reconstruction: world distance, in pixel footprints
     float sigma_normal = 0.1f;    // |n_i - n_p|
     float sigma_mu_v = 0.15f;     // occlusion ratio
