@@ -126,6 +126,13 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
     result.layers = std::move(gb.layers);
     long rays = gb.rays, guarded = 0;
     nlohmann::json sparse_stats;
+    // Method A's environment bandwidth hierarchy: built (or loaded) once, timed when used.
+    const EnvBandwidthHierarchy* bw = nullptr;
+    if (config_.method == RenderMethod::Points || config_.method == RenderMethod::Sparse) {
+        t0 = Clock::now();
+        bw = bandwidth();
+        stages["env_bandwidth"] = ms_since(t0);
+    }
 
     if (config_.method == RenderMethod::Mis || config_.method == RenderMethod::Reference) {
         t0 = Clock::now();
@@ -137,9 +144,6 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
         guarded = out.nonfinite;
     } else if (config_.method == RenderMethod::Points) {
         t0 = Clock::now();
-        const EnvBandwidthHierarchy* bw = bandwidth();
-        stages["env_bandwidth"] = ms_since(t0);
-        t0 = Clock::now();
         const PointsPassOutput out =
             render_points(ray_scene_, gb.gbuffer, frame, config_.frame, config_.shading,
                           config_.points, bw, result.layers, progress);
@@ -147,9 +151,6 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
         rays += out.rays;
         guarded = out.nonfinite;
     } else if (config_.method == RenderMethod::Sparse) {
-        t0 = Clock::now();
-        const EnvBandwidthHierarchy* bw = bandwidth();
-        stages["env_bandwidth"] = ms_since(t0);
         SparsePassOutput out =
             render_sparse(ray_scene_, gb.gbuffer, frame, config_.frame, config_.shading,
                           config_.points, config_.sparse, bw, result.layers, progress);
