@@ -85,6 +85,10 @@ void poll_reference(Workbench::State& s);
 void start_reference(Workbench::State& s);
 void render_reference_view(Workbench::State& s, const DisplayParams& params);
 void draw_compare_panel(Workbench::State& s);
+// The viewport (workbench_viewport.cpp).
+void draw_viewport(Workbench::State& s);
+// The inspector panel (workbench_inspector.cpp).
+void draw_inspector(Workbench& wb, Workbench::State& s);
 void draw_export_menu(Workbench::State& s);
 void draw_session_menu(Workbench& wb, Workbench::State& s);
 nlohmann::json session_to_json(const Workbench::State& s);

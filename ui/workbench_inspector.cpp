@@ -1,0 +1,100 @@
+// The workbench's inspector panel: every layer's value at the picked pixel, the frame's stats,
+// the method's trace of that pixel and, for radiance points, their pilot samples in the cone.
+#include "workbench_state.h"
+
+#include <imgui.h>
+
+#include <cmath>
+#include <cstdio>
+
+namespace freqlab::ui {
+
+// The radiance point's pilot samples in its cone frame (azimuthal-equidistant: distance from
+// the centre is the angle from mu_rho): visible green, occluded red; the footprint circle; the
+// 1-sigma ellipse of the occluded samples (Eq. 4.4) about their mean.
+namespace {
+
+void draw_cone_samples(const RadiancePoint& rp) {
+    ImGui::TextDisabled("pilot samples in the BRDF cone (N_L = %.0f, N_Omega = %.0f)", rp.N_L,
+                        rp.N_omega);
+    const float size = std::min(ImGui::GetContentRegionAvail().x, 220.0f);
+    const ImVec2 o = ImGui::GetCursorScreenPos(), c(o.x + size / 2, o.y + size / 2);
+    ImDrawList* dl = ImGui::GetWindowDrawList();
+    dl->AddRectFilled(o, ImVec2(o.x + size, o.y + size), IM_COL32(24, 24, 28, 255));
+    const double extent = std::max(rp.footprint_radius * 1.25, 0.05);
+    const float scale = float(0.5 * size / extent);
+    auto at = [&](double u, double v) {
+        return ImVec2(c.x + float(u) * scale, c.y - float(v) * scale);
+    };
+    dl->AddCircle(c, float(rp.footprint_radius) * scale, IM_COL32(200, 200, 200, 200), 64, 1.0f);
+    for (const RadiancePoint::ConeSample& q : rp.cone_samples)
+        dl->AddCircleFilled(at(q.u, q.v), 2.0f,
+                            q.occluded ? IM_COL32(235, 80, 60, 255) : IM_COL32(90, 210, 110, 255));
+    if (rp.pilot_occluded > 1) {
+        // Ellipse from the eigen-decomposition of the 2x2 covariance.
+        const double a = rp.sigma_o[0], b = rp.sigma_o[1], d = rp.sigma_o[2];
+        const double tr = 0.5 * (a + d),
+                     det = std::sqrt(std::max(0.25 * (a - d) * (a - d) + b * b, 0.0));
+        const double l1 = std::sqrt(std::max(tr + det, 0.0)),
+                     l2 = std::sqrt(std::max(tr - det, 0.0));
+        const double angle = 0.5 * std::atan2(2 * b, a - d);
+        ImVec2 prev;
+        for (int i = 0; i <= 48; ++i) {
+            const double t = 2 * M_PI * i / 48, x = l1 * std::cos(t), y = l2 * std::sin(t);
+            const ImVec2 p = at(rp.mu_o[0] + x * std::cos(angle) - y * std::sin(angle),
+                                rp.mu_o[1] + x * std::sin(angle) + y * std::cos(angle));
+            if (i) dl->AddLine(prev, p, IM_COL32(255, 200, 60, 255), 1.5f);
+            prev = p;
+        }
+    }
+    ImGui::Dummy(ImVec2(size, size + 4));
+    ImGui::Text("sigma_rho %.4f rad, sigma_V %.4f rad, occluded %d / %d", rp.sigma_rho, rp.sigma_V,
+                rp.pilot_occluded, rp.pilot_rays);
+}
+
+}  // namespace
+
+void draw_inspector(Workbench& wb, Workbench::State& s) {
+    if (!s.shown || s.pick_x < 0) {
+        ImGui::TextWrapped("Click a pixel in the viewport to see every layer's value there.");
+        return;
+    }
+    ImGui::Text("pixel (%d, %d), frame %d", s.pick_x, s.pick_y, s.shown->frame);
+    ImGui::Separator();
+    for (const InspectorRow& row : wb.inspect()) {
+        std::string values;
+        char buf[32];
+        for (size_t c = 0; c < row.values.size(); ++c) {
+            std::snprintf(buf, sizeof buf, "%s%.5g", c ? ", " : "", row.values[c]);
+            values += buf;
+        }
+        ImGui::Text("%-10s %s %s", row.layer.c_str(), values.c_str(), row.note.c_str());
+    }
+    ImGui::Separator();
+    ImGui::TextDisabled("frame stats");
+    for (const auto& [key, value] : s.shown->stats.items())
+        if (!value.is_object() && (s.options.show_timings || key != "time_ms"))
+            ImGui::Text("%-14s %s", key.c_str(), value.dump().c_str());
+    // The method's record of this pixel: its estimate re-run with every sample traced.
+    ImGui::Separator();
+    // One pixel is cheap to re-run; it waits while a render job owns the renderer.
+    const bool idle = (!s.job || s.job->done()) && !s.show_env_bandwidth;
+    const std::pair<int, int> pick{s.pick_x, s.pick_y};
+    if (s.renderer && idle && (s.trace_pixel != pick || s.trace_frame != s.shown->frame)) {
+        RadiancePoint point;
+        point.footprint_radius = -1.0;  // stays negative unless a radiance point was traced
+        s.trace_lines = s.renderer->trace_pixel(*s.shown, s.pick_x, s.pick_y, 32, &point);
+        s.trace_point.reset();
+        if (point.footprint_radius >= 0.0) s.trace_point = point;
+        s.trace_pixel = pick;
+        s.trace_frame = s.shown->frame;
+    }
+    if (s.trace_point && s.trace_pixel == pick) draw_cone_samples(*s.trace_point);
+    ImGui::TextDisabled("trace of this pixel's estimate");
+    if (!s.trace_lines.empty() && s.trace_pixel == pick) {
+        ImGui::BeginChild("trace", ImVec2(0, 0), true, ImGuiWindowFlags_HorizontalScrollbar);
+        for (const std::string& l : s.trace_lines) ImGui::TextUnformatted(l.c_str());
+        ImGui::EndChild();
+    }
+}
+}  // namespace freqlab::ui
