@@ -26,6 +26,43 @@ vec3 demodulate(const vec3& radiance, const vec3& texture) {
     return out;
 }
 
+// Chamfer distance (px; 1 and sqrt 2 steps) from each pixel to the nearest pixel of another
+// object or of the background; two raster passes.
+std::vector<float> distance_to_object_edge(int w, int h, const std::vector<PixelFeature>& f) {
+    const float big = 1e9f, diag = 1.41421356f;
+    std::vector<float> d(size_t(w) * h, big);
+    auto id = [&](int x, int y) {
+        return f[size_t(y) * w + x].valid ? f[size_t(y) * w + x].object : -1;
+    };
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const int o = id(x, y);
+            bool edge = false;
+            for (auto [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+                const int xx = x + dx, yy = y + dy;
+                if (xx >= 0 && yy >= 0 && xx < w && yy < h && id(xx, yy) != o) edge = true;
+            }
+            if (edge) d[size_t(y) * w + x] = 1.0f;
+        }
+    auto relax = [&](int x, int y, int dx, int dy, float step) {
+        const int xx = x + dx, yy = y + dy;
+        if (xx < 0 || yy < 0 || xx >= w || yy >= h) return;
+        float& here = d[size_t(y) * w + x];
+        here = std::min(here, d[size_t(yy) * w + xx] + step);
+    };
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            relax(x, y, -1, 0, 1.0f), relax(x, y, 0, -1, 1.0f);
+            relax(x, y, -1, -1, diag), relax(x, y, 1, -1, diag);
+        }
+    for (int y = h - 1; y >= 0; --y)
+        for (int x = w - 1; x >= 0; --x) {
+            relax(x, y, 1, 0, 1.0f), relax(x, y, 0, 1, 1.0f);
+            relax(x, y, 1, 1, diag), relax(x, y, -1, 1, diag);
+        }
+    return d;
+}
+
 }  // namespace
 
 SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
@@ -120,6 +157,7 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
 
     // 3. Density from the per-pixel screen-space bandwidth.
     t0 = Clock::now();
+    const std::vector<float> to_edge = distance_to_object_edge(w, h, features);
     std::vector<float> density(n, 0.0f), mu_v(n, 0.0f), sigma_v(n, 0.0f), radius(n, 1.0f);
     tbb::parallel_for(0, h, [&](int y) {
         for (int x = 0; x < w; ++x) {
@@ -141,6 +179,10 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
                 const PointBandwidths b = integrator.bandwidths(
                     shading_points[i], point_context(gb, x, y, rs.time()), B_L, t_min);
                 density[i] = float(sampling_density(b.B_S, radians_per_pixel, sparse));
+                // Near an object's edge the reconstruction can only look inwards: samples there
+                // keep it from extrapolating across the last (2 / d)^2 pixels.
+                const float d = std::max(to_edge[i], 1.0f);
+                density[i] = std::max(density[i], std::min(1.0f, 4.0f / (d * d)));
             }
             radius[i] =
                 std::clamp(2.0f / std::sqrt(std::max(density[i], 1e-6f)), 1.0f, sparse.f_max);

@@ -6,6 +6,9 @@
 //   radiance points at the chosen pixels -> cross-bilateral reconstruction of the demodulated
 //   shading -> texture x shading.
 // Perfect mirrors are always sampled (density 1): their reflections are followed, not filtered.
+// Pixels d px from an object's edge get a density of at least (2 / d)^2: the reconstruction
+// only looks inwards there, and without samples near the edge it extrapolates (measured: +3.1 %
+// on sphere_on_plane's lower sphere at 320 x 180, tests/test_sparse.cpp).
 #pragma once
 
 #include <nlohmann/json.hpp>
