@@ -22,3 +22,5 @@ shot points_inspector.png scenes/rotor.json --method points --frame 3 --overlay 
 shot env_bandwidth.png scenes/rotor.json --method gbuffer --frame 0 --env-bandwidth --overlay "B_L r=22.5deg"
 shot sparse_density.png scenes/rotor.json --method sparse --frame 0 --overlay density
 shot sparse_sampled.png scenes/rotor.json --method sparse --frame 0 --overlay sampled
+shot sparse_inspector.png scenes/rotor.json --method sparse --frame 0 --overlay sampled --inspect 300,280 \
+     --size 1280x1000

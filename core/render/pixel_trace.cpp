@@ -1,13 +1,16 @@
 // --debug-pixel and the inspector's trace: re-runs one pixel's direct-lighting estimate with
 // every sample recorded (strategy, direction, pdfs, MIS weight, contribution, visibility).
 // The numbers are those of the render: same seed keys, same estimator.
+#include <algorithm>
 #include <cstdio>
 
 #include "render/direct_lighting.h"
 #include "render/frame_renderer.h"
 #include "render/points_pass.h"
 #include "render/radiance_point.h"
+#include "render/reconstruction.h"
 #include "render/shading_pass.h"
+#include "render/sparse_sampling.h"
 
 namespace freqlab {
 
@@ -51,6 +54,61 @@ std::vector<std::string> FrameRenderer::trace_pixel(const FrameResult& r, int x,
     if (sp.material->type == BrdfType::Mirror) {
         line("perfect mirror: followed up to shading.mirror_depth = %d bounces",
              config.shading.mirror_depth);
+        return out;
+    }
+    if (config.method == RenderMethod::Sparse && r.layers.find("samples")) {
+        // Which radiance points the reconstruction used here, and with what weight (Eq. 6.2).
+        const int w = r.layers.width(), h = r.layers.height();
+        const double angle = radians_per_pixel(cam, w, h);
+        auto feature_at = [&](int px, int py) {
+            const Ray ray_p{cam.origin, cam.direction((px + 0.5f) / w, (py + 0.5f) / h)};
+            return pixel_feature(rs.intersect(ray_p), ray_p.direction, angle);
+        };
+        const Layer& kind = r.layers.get("sampled");
+        const Layer& samples = r.layers.get("samples");
+        const Layer& mu = r.layers.get("mu_v");
+        const Layer& sig = r.layers.get("sigma_v");
+        const size_t i = size_t(y) * w + x;
+        const float radius = r.layers.get("recon_radius").data[i];
+        line("reconstruction: radius %.2f px, sum of weights %.4g, sampled here: %s", radius,
+             r.layers.get("recon_weight").data[i], kind.legend[size_t(kind.data[i])].c_str());
+        if (sp.material->type == BrdfType::Mirror) {
+            line("perfect mirror: its own radiance point, never filtered");
+            return out;
+        }
+        const PixelFeature fi = feature_at(x, y);
+        struct Contribution {
+            int x, y;
+            double weight;
+        };
+        std::vector<Contribution> used;
+        double total = 0.0;
+        const int ri = int(std::ceil(radius));
+        for (int yy = std::max(0, y - ri); yy <= std::min(h - 1, y + ri); ++yy)
+            for (int xx = std::max(0, x - ri); xx <= std::min(w - 1, x + ri); ++xx) {
+                const size_t j = size_t(yy) * w + xx;
+                if (kind.data[j] == 0.0f ||
+                    float((xx - x) * (xx - x) + (yy - y) * (yy - y)) > radius * radius)
+                    continue;
+                const PixelFeature fj = feature_at(xx, yy);
+                if (!fj.valid || fj.object != fi.object) continue;
+                const double wgt = reconstruction_weight(fi, fj, mu.data[i], mu.data[j],
+                                                         sig.data[i], sig.data[j], config.sparse);
+                used.push_back({xx, yy, wgt});
+                total += wgt;
+            }
+        std::sort(used.begin(), used.end(),
+                  [](const Contribution& a, const Contribution& b) { return a.weight > b.weight; });
+        line("%zu radiance points on this object within the radius", used.size());
+        line("%-11s %-9s %10s %8s  %s", "pixel", "origin", "weight", "share",
+             "the point's radiance (texture included)");
+        for (size_t k = 0; k < used.size() && k < max_samples; ++k) {
+            const size_t j = size_t(used[k].y) * w + used[k].x;
+            line("(%4d,%4d) %-9s %10.4g %7.2f%%  (%.5g, %.5g, %.5g)", used[k].x, used[k].y,
+                 kind.legend[size_t(kind.data[j])].c_str(), used[k].weight,
+                 total > 0 ? 100.0 * used[k].weight / total : 0.0, samples.data[3 * j],
+                 samples.data[3 * j + 1], samples.data[3 * j + 2]);
+        }
         return out;
     }
     if (config.method == RenderMethod::Points) {

@@ -7,6 +7,17 @@
 
 namespace freqlab {
 
+double reconstruction_weight(const PixelFeature& fi, const PixelFeature& fj, float mu_i, float mu_j,
+                             float sigma_i, float sigma_j, const SparseSettings& s) {
+    const float dp = glm::length(fi.position - fj.position) / std::max(fi.footprint, 1e-12f);
+    const float dn2 = glm::dot(fi.normal - fj.normal, fi.normal - fj.normal);
+    const float dm = mu_i - mu_j, ds = sigma_i - sigma_j;
+    return std::exp(-(dp * dp / (2.0f * s.sigma_position * s.sigma_position) +
+                      dn2 / (2.0f * s.sigma_normal * s.sigma_normal) +
+                      dm * dm / (2.0f * s.sigma_mu_v * s.sigma_mu_v) +
+                      ds * ds / (2.0f * s.sigma_sigma_v * s.sigma_sigma_v)));
+}
+
 ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSettings& s) {
     const int w = in.width, h = in.height;
     const size_t n = size_t(w) * h;
@@ -15,10 +26,6 @@ ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSett
     out.weight.assign(n, 0.0f);
     out.radius_used.assign(n, 0.0f);
     out.fallback.assign(n, 0);
-    const float kp = 1.0f / (2.0f * s.sigma_position * s.sigma_position);
-    const float kn = 1.0f / (2.0f * s.sigma_normal * s.sigma_normal);
-    const float km = 1.0f / (2.0f * s.sigma_mu_v * s.sigma_mu_v);
-    const float ks = 1.0f / (2.0f * s.sigma_sigma_v * s.sigma_sigma_v);
     std::atomic<long> fallbacks{0};
     // 16 x 16 tiles (seed §7), rows of tiles in parallel; each pixel reads only the inputs.
     const int tiles_y = (h + 15) / 16;
@@ -29,7 +36,6 @@ ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSett
                 const size_t i = size_t(y) * w + x;
                 const PixelFeature& fi = in.features[i];
                 if (!fi.valid) continue;
-                const float reach = std::max(fi.footprint, 1e-12f);
                 float r = std::clamp(in.radius[i], 1.0f, s.f_max);
                 for (;;) {
                     const int ri = int(std::ceil(r));
@@ -43,13 +49,8 @@ ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSett
                             if (fj.object != fi.object) continue;
                             const float dx = float(xx - x), dy = float(yy - y);
                             if (dx * dx + dy * dy > r * r) continue;
-                            const float dp = glm::length(fi.position - fj.position) / reach;
-                            const float dn2 =
-                                glm::dot(fi.normal - fj.normal, fi.normal - fj.normal);
-                            const float dm = in.mu_v[i] - in.mu_v[j],
-                                        ds = in.sigma_v[i] - in.sigma_v[j];
-                            const double weight =
-                                std::exp(-(dp * dp * kp + dn2 * kn + dm * dm * km + ds * ds * ks));
+                            const double weight = reconstruction_weight(
+                                fi, fj, in.mu_v[i], in.mu_v[j], in.sigma_v[i], in.sigma_v[j], s);
                             sum_w += weight;
                             acc += weight * glm::dvec3(in.value[j]);
                         }

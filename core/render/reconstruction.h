@@ -35,4 +35,9 @@ struct ReconstructionOutput {
 
 ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSettings& settings);
 
+// Eq. 6.2's weight of the sample at pixel j for pixel i (what reconstruct() sums; the inspector
+// lists it). Distance in units of pixel i's footprint.
+double reconstruction_weight(const PixelFeature& fi, const PixelFeature& fj, float mu_i, float mu_j,
+                             float sigma_i, float sigma_j, const SparseSettings& settings);
+
 }  // namespace freqlab

@@ -76,9 +76,7 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
     const RadiancePointIntegrator integrator(rs, shading, points, bandwidth);
     const DirectLighting& lighting = integrator.lighting();
     const CameraRayGenerator camera(rs.scene().camera.at(rs.time()), w, h);
-    const double fov_y = 2.0 * std::atan(double(camera.tan_half_fov));
-    const double fov_x = 2.0 * std::atan(double(camera.tan_half_fov) * camera.aspect);
-    const double radians_per_pixel = std::max(fov_x / w, fov_y / h);
+    const double pixel_angle = radians_per_pixel(camera, w, h);
 
     // Features of every pixel.
     std::vector<PixelFeature> features(n);
@@ -87,11 +85,7 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
     for (size_t i = 0; i < n; ++i) {
         const SurfaceHit& hit = gb.hits[i];
         if (!hit.valid) continue;
-        // The pixel's extent on the surface: its solid angle's width at the hit, stretched by
-        // the grazing angle (without it, rows of a far plane never find each other).
-        const float cos_view = std::fabs(glm::dot(hit.geometric_normal, gb.view_dirs[i]));
-        features[i] = {true, hit.object, hit.position, hit.shading_normal,
-                       float(hit.distance * radians_per_pixel) / std::max(cos_view, 0.05f)};
+        features[i] = pixel_feature(hit, gb.view_dirs[i], pixel_angle);
         shading_points[i] = lighting.shading_point(hit, -gb.view_dirs[i]);
         mirror[i] = shading_points[i].material->type == BrdfType::Mirror;
     }
@@ -178,7 +172,7 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
                 const double B_L = integrator.environment_bandwidth(shading_points[i]);
                 const PointBandwidths b = integrator.bandwidths(
                     shading_points[i], point_context(gb, x, y, rs.time()), B_L, t_min);
-                density[i] = float(sampling_density(b.B_S, radians_per_pixel, sparse));
+                density[i] = float(sampling_density(b.B_S, pixel_angle, sparse));
                 // Near an object's edge the reconstruction can only look inwards: samples there
                 // keep it from extrapolating across the last (2 / d)^2 pixels.
                 const float d = std::max(to_edge[i], 1.0f);
@@ -242,6 +236,12 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
         layers.add("recon_weight", LayerKind::Continuous, 1, "sum of reconstruction weights");
     Layer& radius_layer =
         layers.add("recon_radius", LayerKind::Continuous, 1, "reconstruction radius (px)");
+    Layer& sample_layer = layers.add("samples", LayerKind::Color, 3,
+                                     "the radiance points' own values (0 where none)");
+    Layer& mu_layer =
+        layers.add("mu_v", LayerKind::Continuous, 1, "reconstruction feature: occlusion ratio");
+    Layer& sigma_layer =
+        layers.add("sigma_v", LayerKind::Continuous, 1, "reconstruction feature: sigma_V (rad)");
     Layer& ray_layer =
         layers.add("rays", LayerKind::Continuous, 1, "rays cast for the pixel's radiance point");
     std::vector<Layer*> part1;
@@ -266,8 +266,11 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
         sampled_layer.data[i] = float(int(kind[i]));
         weight_layer.data[i] = rec.weight[i];
         radius_layer.data[i] = rec.radius_used[i];
+        mu_layer.data[i] = mu_v[i];
+        sigma_layer.data[i] = sigma_v[i];
         if (!sampled[i]) continue;
         const RadiancePoint& rp = point[i];
+        for (int ch = 0; ch < 3; ++ch) sample_layer.data[3 * i + size_t(ch)] = rp.radiance[ch];
         ray_layer.data[i] = float(rp.rays);
         const double v[] = {rp.B_L,   rp.sigma_rho, rp.N_omega, rp.sigma_V, rp.occlusion_ratio,
                             rp.t_min, rp.B_S,       rp.B_x,     rp.B_theta, rp.B_t};

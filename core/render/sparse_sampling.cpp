@@ -13,6 +13,19 @@ double sampling_density(double B_S, double radians_per_pixel, const SparseSettin
     return std::isfinite(d) ? std::clamp(d, b_min, 1.0) : 1.0;
 }
 
+PixelFeature pixel_feature(const SurfaceHit& hit, const vec3& view_dir, double radians_per_pixel) {
+    if (!hit.valid) return PixelFeature{};
+    const float cos_view = std::fabs(glm::dot(hit.geometric_normal, view_dir));
+    return PixelFeature{true, hit.object, hit.position, hit.shading_normal,
+                        float(hit.distance * radians_per_pixel) / std::max(cos_view, 0.05f)};
+}
+
+double radians_per_pixel(const CameraRayGenerator& camera, int w, int h) {
+    const double fov_y = 2.0 * std::atan(double(camera.tan_half_fov));
+    const double fov_x = 2.0 * std::atan(double(camera.tan_half_fov) * camera.aspect);
+    return std::max(fov_x / w, fov_y / h);
+}
+
 bool rejection_sample(double density, CounterRng& rng) {
     return double(rng.next_float()) < density;
 }

@@ -15,8 +15,10 @@
 #include <array>
 #include <vector>
 
+#include "accel/ray_scene.h"
 #include "math/rng.h"
 #include "math/types.h"
+#include "scene/camera.h"
 #include "settings/sparse_settings.h"
 
 namespace freqlab {
@@ -31,6 +33,13 @@ struct PixelFeature {
     vec3 position{0.0f}, normal{0.0f};
     float footprint = 0.0f;  // world size of the pixel on the surface
 };
+
+// The pixel's features from its centre hit: its extent on the surface is the pixel's angular
+// width at the hit, stretched by the grazing angle (without it, rows of a far plane never find
+// each other).
+PixelFeature pixel_feature(const SurfaceHit& hit, const vec3& view_dir, double radians_per_pixel);
+// max(f_x / W, f_y / H): the angle one pixel subtends (seed §7).
+double radians_per_pixel(const CameraRayGenerator& camera, int width, int height);
 
 constexpr int kUpsampledStats = 4;
 using VisibilityStats = std::array<float, kUpsampledStats>;
