@@ -72,17 +72,8 @@ PointsPassOutput render_points(const RayScene& scene, const GBuffer& gb, int fra
             const SurfaceHit& hit = gb.hits[p];
             RadiancePoint rp;
             if (hit.valid) {
-                const ShadingPoint sp = integrator.lighting().shading_point(hit, -gb.view_dirs[p]);
-                if (sp.material->type == BrdfType::Mirror) {
-                    // Mirrors are followed as in the MIS baseline; no radiance point of their own.
-                    const RadianceEstimate e = integrator.lighting().shade_hit(
-                        hit, -gb.view_dirs[p], settings.max_samples, rng);
-                    rp.radiance = e.radiance;
-                    rp.variance = e.variance;
-                    rp.rays = e.rays;
-                } else {
-                    rp = integrator.integrate(sp, point_context(gb, x, y, scene.time()), rng);
-                }
+                rp = integrator.integrate_hit(hit, -gb.view_dirs[p],
+                                              point_context(gb, x, y, scene.time()), rng);
             } else {
                 rp.radiance = scene.scene().background(gb.view_dirs[p]);
             }

@@ -67,6 +67,44 @@ RadiancePointIntegrator::RadiancePointIntegrator(const RayScene& scene,
     : scene_(scene), lighting_(scene, shading), settings_(settings), bandwidth_(bandwidth) {
     const double radius = 0.5 * glm::length(glm::dvec3(scene.bounds_max() - scene.bounds_min()));
     large_distance_ = settings.large_distance * std::max(radius, 1e-3);
+    mirror_depth_ = shading.mirror_depth;
+}
+
+RadiancePoint RadiancePointIntegrator::integrate_hit(const SurfaceHit& first, const vec3& first_wo,
+                                                     const PointContext& context,
+                                                     CounterRng& rng) const {
+    SurfaceHit hit = first;
+    vec3 wo = first_wo, throughput(1.0f);
+    PointContext ctx = context;
+    long rays = 0;
+    for (int depth = 0;; ++depth) {
+        const ShadingPoint sp = lighting_.shading_point(hit, wo);
+        if (sp.material->type != BrdfType::Mirror) {
+            if (depth > 0) ctx.curvature = 0.0;  // the screen-space estimate was the mirror's
+            RadiancePoint rp = integrate(sp, ctx, rng);
+            rp.radiance *= throughput;
+            rp.variance *= luminance(throughput) * luminance(throughput);
+            rp.rays += rays;
+            return rp;
+        }
+        RadiancePoint black;
+        black.rays = rays;
+        if (depth >= mirror_depth_) return black;
+        const vec3 r = reflect_about(wo, sp.shading_normal);
+        if (glm::dot(r, sp.geometric_normal) <= 0.0f) return black;
+        throughput *= sp.albedo;
+        const Ray ray{lighting_.offset_origin(sp.position, sp.geometric_normal), r};
+        hit = scene_.intersect(ray);
+        ++rays;
+        if (!hit.valid) {
+            const EnvironmentMap* env = scene_.scene().environment();
+            black.radiance = throughput * (env ? env->eval_smooth(r) : vec3(0.0f));
+            return black;
+        }
+        ctx.eye_distance += hit.distance;
+        ctx.object = hit.object;
+        wo = -r;
+    }
 }
 
 RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const PointContext& ctx,

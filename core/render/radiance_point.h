@@ -81,6 +81,12 @@ class RadiancePointIntegrator {
     // With `chain`, every input, operator and intermediate value is appended as text.
     RadiancePoint integrate(const ShadingPoint& point, const PointContext& context, CounterRng& rng,
                             std::vector<std::string>* chain = nullptr) const;
+    // The point seen at a G-buffer hit: perfect mirrors are followed (Whitted, up to
+    // shading.mirror_depth) and the radiance point is integrated at the first non-mirror hit,
+    // times the mirrors' albedos; its frequency fields are that point's. A ray that escapes
+    // sees the environment.
+    RadiancePoint integrate_hit(const SurfaceHit& hit, const vec3& wo, const PointContext& context,
+                                CounterRng& rng) const;
     const DirectLighting& lighting() const { return lighting_; }
     // B_L in the point's BRDF footprint (cycles/rad; 0 without an environment).
     double environment_bandwidth(const ShadingPoint& point) const;
@@ -96,6 +102,7 @@ class RadiancePointIntegrator {
     PointsSettings settings_;
     const EnvBandwidthHierarchy* bandwidth_;
     double large_distance_;
+    int mirror_depth_;
 };
 
 }  // namespace freqlab

@@ -97,16 +97,8 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
     auto shade = [&](size_t i, uint64_t pass) {
         const int x = int(i % size_t(w)), y = int(i / size_t(w));
         CounterRng rng(uint64_t(fs.seed) ^ kPointsStream, uint64_t(frame), i, pass);
-        RadiancePoint rp;
-        if (mirror[i]) {
-            const RadianceEstimate e =
-                lighting.shade_hit(gb.hits[i], -gb.view_dirs[i], points.max_samples, rng);
-            rp.radiance = e.radiance;
-            rp.variance = e.variance;
-            rp.rays = e.rays;
-        } else {
-            rp = integrator.integrate(shading_points[i], point_context(gb, x, y, rs.time()), rng);
-        }
+        RadiancePoint rp = integrator.integrate_hit(gb.hits[i], -gb.view_dirs[i],
+                                                    point_context(gb, x, y, rs.time()), rng);
         if (!std::isfinite(rp.radiance.x + rp.radiance.y + rp.radiance.z)) rp = RadiancePoint{};
         rp.cone_samples.clear();
         rp.cone_samples.shrink_to_fit();
