@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <mutex>
+#include "image/colormap.h"
 #include "layer_view.h"
 #include "render/frame_renderer.h"
 #include "workbench.h"
@@ -68,6 +69,40 @@ void draw_colorbar(Workbench::State& s, const Layer& layer, ImVec2 origin, float
             IM_COL32(230, 230, 230, 255), label);
     }
     ImGui::Dummy(ImVec2(width, h + 24));
+}
+
+// A sparse layer's samples as 2 x 2 screen-pixel points when its texels are smaller than
+// that on screen (the nearest-texel image then skips most of them); one point per 2 x 2 cell
+// of the screen, the first sample found there.
+void draw_sparse_points(const Workbench::State& s, const Layer& layer, const LayerSet& L,
+                        ImVec2 origin, ImVec2 size, ImVec2 uv0, ImVec2 uv1) {
+    const float texel_px = size.x / (L.width() * (uv1.x - uv0.x));
+    if (texel_px >= 2.0f) return;
+    const int cells_x = int(size.x / 2) + 1, cells_y = int(size.y / 2) + 1;
+    std::vector<char> taken(size_t(cells_x) * cells_y, 0);
+    ImDrawList* dl = ImGui::GetWindowDrawList();
+    const int x0 = std::max(0, int(uv0.x * L.width())),
+              x1 = std::min(L.width(), int(uv1.x * L.width()) + 1);
+    const int y0 = std::max(0, int(uv0.y * L.height())),
+              y1 = std::min(L.height(), int(uv1.y * L.height()) + 1);
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
+            const float v = layer.at(L.width(), x, y);
+            if (v == 0.0f || !std::isfinite(v)) continue;
+            const float px = origin.x + ((x + 0.5f) / L.width() - uv0.x) / (uv1.x - uv0.x) * size.x;
+            const float py =
+                origin.y + ((y + 0.5f) / L.height() - uv0.y) / (uv1.y - uv0.y) * size.y;
+            const int cx = int((px - origin.x) / 2), cy = int((py - origin.y) / 2);
+            if (cx < 0 || cy < 0 || cx >= cells_x || cy >= cells_y) continue;
+            char& cell = taken[size_t(cy) * cells_x + size_t(cx)];
+            if (cell) continue;
+            cell = 1;
+            const vec3 c = layer.kind == LayerKind::Categorical
+                               ? categorical(int(std::lround(v)))
+                               : viridis((v - s.shown_range.lo) /
+                                         std::max(s.shown_range.hi - s.shown_range.lo, 1e-20f));
+            dl->AddRectFilled(ImVec2(px - 1, py - 1), ImVec2(px + 1, py + 1), to_u32(c));
+        }
 }
 
 }  // namespace
@@ -148,6 +183,7 @@ void draw_viewport(Workbench::State& s) {
     }
     s.image_rect = {origin.x, origin.y, origin.x + size.x, origin.y + size.y};
     const bool item_hovered = ImGui::IsItemHovered();
+    if (layer->sparse) draw_sparse_points(s, *layer, L, origin, size, uv0, uv1);
     if (s.split && s.references.count(s.shown->frame)) {
         // Split view: the reference's colour right of the split, same zoom and pan.
         const float split_u = uv0.x + s.split_position * (uv1.x - uv0.x);

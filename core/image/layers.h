@@ -25,7 +25,10 @@ struct Layer {
     int channels = 1;
     std::string description;
     std::vector<std::string> legend;  // Categorical: legend[i] names value i
-    std::vector<float> data;          // interleaved, row-major from the top row
+    // Values only at the pixels that hold a sample (0 elsewhere, e.g. method A's radiance
+    // points): viewers draw those pixels as points so that zooming out never hides them.
+    bool sparse = false;
+    std::vector<float> data;  // interleaved, row-major from the top row
 
     float& at(int width, int x, int y, int c = 0) {
         return data[(size_t(y) * width + x) * channels + c];

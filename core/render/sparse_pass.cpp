@@ -224,6 +224,7 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
     Layer& sampled_layer =
         layers.add("sampled", LayerKind::Categorical, 1, "radiance points by origin");
     sampled_layer.legend = {"none", "initial", "adaptive", "fallback"};
+    sampled_layer.sparse = true;
     Layer& weight_layer =
         layers.add("recon_weight", LayerKind::Continuous, 1, "sum of reconstruction weights");
     Layer& radius_layer =
