@@ -15,6 +15,11 @@ const std::vector<std::string>& radiance_point_layer_names() {
     return names;
 }
 
+std::array<double, 10> radiance_point_fields(const RadiancePoint& rp) {
+    return {rp.B_L,   rp.sigma_rho, rp.N_omega, rp.sigma_V, rp.occlusion_ratio,
+            rp.t_min, rp.B_S,       rp.B_x,     rp.B_theta, rp.B_t};
+}
+
 PointContext point_context(const GBuffer& gb, int x, int y, float time) {
     PointContext ctx;
     ctx.time = time;
@@ -77,19 +82,14 @@ PointsPassOutput render_points(const RayScene& scene, const GBuffer& gb, int fra
             } else {
                 rp.radiance = scene.scene().background(gb.view_dirs[p]);
             }
-            auto fields = [&rp] {
-                return std::array<double, 10>{
-                    rp.B_L,   rp.sigma_rho, rp.N_omega, rp.sigma_V, rp.occlusion_ratio,
-                    rp.t_min, rp.B_S,       rp.B_x,     rp.B_theta, rp.B_t};
-            };
-            std::array<double, 10> vals = fields();
+            std::array<double, 10> vals = radiance_point_fields(rp);
             bool bad = !std::isfinite(rp.radiance.x + rp.radiance.y + rp.radiance.z) ||
                        !std::isfinite(rp.variance);
             for (double v : vals) bad |= !std::isfinite(v);
             if (bad) {  // counted and zeroed, never kept silently
                 ++task_bad;
                 rp = RadiancePoint{};
-                vals = fields();
+                vals = radiance_point_fields(rp);
             }
             task_rays += rp.rays;
             for (int yy = by * k; yy < std::min(h, (by + 1) * k); ++yy)

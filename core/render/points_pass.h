@@ -3,6 +3,8 @@
 // frequency analysis as layers.
 #pragma once
 
+#include <array>
+
 #include "freq/env_bandwidth.h"
 #include "render/gbuffer.h"
 #include "render/radiance_point.h"
@@ -16,6 +18,9 @@ struct PointsPassOutput {
 
 // The layers written, in order (after `color` and `variance`).
 const std::vector<std::string>& radiance_point_layer_names();
+
+// The point's values in the order of radiance_point_layer_names().
+std::array<double, 10> radiance_point_fields(const RadiancePoint& point);
 
 PointContext point_context(const GBuffer& gbuffer, int x, int y, float time);
 

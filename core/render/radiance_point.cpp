@@ -28,6 +28,12 @@ double phong_like_exponent(const Material& m) {
     }
 }
 
+// mu_rho: the mirror direction of a glossy lobe, the normal for the whole hemisphere.
+glm::dvec3 footprint_axis(const ShadingPoint& sp, const BrdfFootprint& footprint) {
+    return footprint.whole_hemisphere ? glm::dvec3(sp.shading_normal)
+                                      : glm::dvec3(reflect_about(sp.wo, sp.shading_normal));
+}
+
 void frame_of(const glm::dvec3& n, glm::dvec3& t, glm::dvec3& b) {
     t = glm::normalize(std::fabs(n.z) < 0.9 ? glm::cross(glm::dvec3(0, 0, 1), n)
                                             : glm::cross(glm::dvec3(1, 0, 0), n));
@@ -113,9 +119,7 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
     RadiancePoint rp;
     const Material& material = *sp.material;
     const BrdfFootprint footprint = brdf_footprint(material);
-    const glm::dvec3 n(sp.shading_normal), wo(sp.wo);
-    const glm::dvec3 mu =
-        footprint.whole_hemisphere ? n : glm::dvec3(reflect_about(sp.wo, sp.shading_normal));
+    const glm::dvec3 mu = footprint_axis(sp, footprint);
     const double radius = footprint.query_radius();
     rp.footprint_radius = radius;
     rp.sigma_rho = footprint.whole_hemisphere ? kLambertSigma : std::atan(footprint.sigma);
@@ -282,9 +286,7 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
 
 double RadiancePointIntegrator::environment_bandwidth(const ShadingPoint& sp) const {
     const BrdfFootprint footprint = brdf_footprint(*sp.material);
-    const glm::dvec3 mu = footprint.whole_hemisphere
-                              ? glm::dvec3(sp.shading_normal)
-                              : glm::dvec3(reflect_about(sp.wo, sp.shading_normal));
+    const glm::dvec3 mu = footprint_axis(sp, footprint);
     return bandwidth_ ? bandwidth_->query(vec3(mu), footprint.query_radius()) : 0.0;
 }
 
@@ -294,8 +296,7 @@ PointBandwidths RadiancePointIntegrator::bandwidths(const ShadingPoint& sp, cons
     // Eq. 5.2-5.3 and Appendix 9.
     const BrdfFootprint footprint = brdf_footprint(*sp.material);
     const glm::dvec3 n(sp.shading_normal), wo(sp.wo);
-    const glm::dvec3 mu =
-        footprint.whole_hemisphere ? n : glm::dvec3(reflect_about(sp.wo, sp.shading_normal));
+    const glm::dvec3 mu = footprint_axis(sp, footprint);
     CovarianceInputs in;
     in.sigma_l2 = (B_L / 3.0) * (B_L / 3.0);
     in.cos_in = std::max(glm::dot(n, mu), 0.05);

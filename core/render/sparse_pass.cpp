@@ -265,8 +265,7 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
         const RadiancePoint& rp = point[i];
         for (int ch = 0; ch < 3; ++ch) sample_layer.data[3 * i + size_t(ch)] = rp.radiance[ch];
         ray_layer.data[i] = float(rp.rays);
-        const double v[] = {rp.B_L,   rp.sigma_rho, rp.N_omega, rp.sigma_V, rp.occlusion_ratio,
-                            rp.t_min, rp.B_S,       rp.B_x,     rp.B_theta, rp.B_t};
+        const std::array<double, 10> v = radiance_point_fields(rp);
         for (size_t c2 = 0; c2 < part1.size(); ++c2)
             part1[c2]->data[i] = std::isfinite(v[c2]) ? float(v[c2]) : 0.0f;
     }
