@@ -91,12 +91,7 @@ SlabMultipleScatter::SlabMultipleScatter(std::vector<std::vector<ZhVector>> zh)
 }
 
 void SlabMultipleScatter::derive() {
-    shape_ = zh_;
-    for (size_t k = 1; k < shape_.size(); ++k)
-        for (ZhVector& z : shape_[k]) {
-            const double dc = z[0];
-            for (double& v : z) v /= dc;
-        }
+    // The ZH shape zh / zh_0 and the log fluence, packed [bin][k] for queries.
     const size_t nk = zh_.size(), nb = ZhDistanceTable::kBins;
     packed_shape_.assign(nb * nk * kImpulseOrder, 0.0);
     packed_log_fluence_.assign(nb * nk, 0.0);
@@ -104,7 +99,7 @@ void SlabMultipleScatter::derive() {
         for (size_t i = 0; i < nb; ++i) {
             packed_log_fluence_[i * nk + k] = log_fluence_[k][i];
             for (size_t l = 0; l < size_t(kImpulseOrder); ++l)
-                packed_shape_[(i * nk + k) * kImpulseOrder + l] = shape_[k][i][l];
+                packed_shape_[(i * nk + k) * kImpulseOrder + l] = zh_[k][i][l] / zh_[k][i][0];
         }
 }
 
@@ -113,10 +108,12 @@ ZhVector SlabMultipleScatter::canonical(int k, double z) const {
     if (k < 1 || k > bounces() || !(z >= 0) || z >= ZhDistanceTable::kMaxD) return out;
     const ZhDistanceTable::Stencil st = depth_stencil(z);
     const double dc = fluence(k, z) / std::sqrt(4.0 * kPiD);
-    const std::vector<ZhVector>& sh = shape_[size_t(k)];
+    const size_t nk = zh_.size();
     for (int l = 0; l < kImpulseOrder; ++l)
         out[size_t(l)] =
-            dc * ZhDistanceTable::interpolate(st, [&](int i) { return sh[size_t(i)][size_t(l)]; });
+            dc * ZhDistanceTable::interpolate(st, [&](int i) {
+                return packed_shape_[(size_t(i) * nk + size_t(k)) * kImpulseOrder + size_t(l)];
+            });
     return out;
 }
 

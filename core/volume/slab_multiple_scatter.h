@@ -39,8 +39,7 @@ class SlabMultipleScatter {
   private:
     std::vector<std::vector<ZhVector>> zh_;         // [k][bin]
     std::vector<std::vector<double>> log_fluence_;  // [k][bin]
-    std::vector<std::vector<ZhVector>> shape_;      // zh / zh_0: what is interpolated
-    std::vector<double> packed_shape_;              // [bin][k][l], for bounces_in
+    std::vector<double> packed_shape_;              // [bin][k][l] zh / zh_0: what is interpolated
     std::vector<double> packed_log_fluence_;        // [bin][k]
     void derive();
 };
