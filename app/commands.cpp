@@ -116,6 +116,7 @@ int run_render(const RenderArgs& args) {
                                                       size_t(args.threads));
     EmbreeDevice device(args.threads);
     FrameRenderer renderer(scene, config, device);
+    renderer.keep_cache_details(!args.debug_pixel.empty());  // the trace lists entry tuples
 
     std::error_code ec;
     fs::create_directories(args.out, ec);

@@ -130,6 +130,11 @@ DisplayRange LayerView::render(const LayerSet& set, const Layer& layer, const Di
     glBindTexture(GL_TEXTURE_2D, data_);
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D, mode == 3 ? palette_lut_ : mode == 2 ? diverging_lut_ : ramp_lut_);
+    if (mode == 3) {  // the layer's own palette (or the default one)
+        const std::vector<vec3> palette = layer_palette(layer);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB32F, int(palette.size()), 1, 0, GL_RGB, GL_FLOAT,
+                     palette.data());
+    }
     glUniform1i(glGetUniformLocation(program_, "u_layer"), 0);
     glUniform1i(glGetUniformLocation(program_, "u_lut"), 1);
     glUniform1i(glGetUniformLocation(program_, "u_mode"), mode);

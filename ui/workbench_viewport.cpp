@@ -33,7 +33,7 @@ void draw_colorbar(Workbench::State& s, const Layer& layer, ImVec2 origin, float
             const float item = 18 + ImGui::CalcTextSize(layer.legend[i].c_str()).x + 14;
             if (x > origin.x && x + item > right) x = origin.x, y += 20;
             const ImVec2 a(x, y + 2), b(x + 14, y + 16);
-            dl->AddRectFilled(a, b, to_u32(categorical(int(i))));
+            dl->AddRectFilled(a, b, to_u32(category_colour(layer, int(i))));
             dl->AddText(ImVec2(x + 18, y + 2), IM_COL32(230, 230, 230, 255),
                         layer.legend[i].c_str());
             s.legend.push_back({layer.legend[i], ScreenRect{a.x, a.y, b.x, b.y}});
@@ -98,7 +98,7 @@ void draw_sparse_points(const Workbench::State& s, const Layer& layer, const Lay
             if (cell) continue;
             cell = 1;
             const vec3 c = layer.kind == LayerKind::Categorical
-                               ? categorical(int(std::lround(v)))
+                               ? category_colour(layer, int(std::lround(v)))
                                : viridis((v - s.shown_range.lo) /
                                          std::max(s.shown_range.hi - s.shown_range.lo, 1e-20f));
             dl->AddRectFilled(ImVec2(px - 1, py - 1), ImVec2(px + 1, py + 1), to_u32(c));

@@ -42,6 +42,19 @@ vec3 categorical(int index) {
     return hex(palette[((index % 10) + 10) % 10]);
 }
 
+std::vector<vec3> layer_palette(const Layer& layer) {
+    if (!layer.palette.empty()) return layer.palette;
+    std::vector<vec3> p(10);
+    for (int i = 0; i < 10; ++i) p[size_t(i)] = categorical(i);
+    return p;
+}
+
+vec3 category_colour(const Layer& layer, int index) {
+    if (layer.palette.empty()) return categorical(index);
+    const int n = int(layer.palette.size());
+    return layer.palette[size_t(((index % n) + n) % n)];
+}
+
 float linear_to_srgb(float c) {
     c = std::clamp(c, 0.0f, 1.0f);
     return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
@@ -110,7 +123,7 @@ std::vector<unsigned char> layer_to_rgb8(const LayerSet& set, const Layer& layer
             for (int c = 0; c < 3; ++c)
                 out[c] = linear_to_srgb(scale * v[std::min(c, layer.channels - 1)]);
         } else if (layer.kind == LayerKind::Categorical) {
-            out = categorical(int(std::lround(v[0])));
+            out = category_colour(layer, int(std::lround(v[0])));
         } else if (layer.channels >= 3) {
             // Vectors show component-wise, mapped from the range to [0, 1] (normal maps).
             for (int c = 0; c < 3; ++c) out[c] = (v[c] - range.lo) / (range.hi - range.lo);

@@ -13,6 +13,9 @@ namespace freqlab {
 vec3 viridis(float t);        // t in [0, 1]
 vec3 diverging(float t);      // t in [-1, 1]; 0 is white
 vec3 categorical(int index);  // cycles through 10 colours
+// A categorical layer's colours: its own palette, else the 10 Tableau colours.
+std::vector<vec3> layer_palette(const Layer& layer);
+vec3 category_colour(const Layer& layer, int index);
 float linear_to_srgb(float c);
 
 struct DisplayRange {

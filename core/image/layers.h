@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "math/types.h"
+
 namespace freqlab {
 
 enum class LayerKind {
@@ -25,6 +27,7 @@ struct Layer {
     int channels = 1;
     std::string description;
     std::vector<std::string> legend;  // Categorical: legend[i] names value i
+    std::vector<vec3> palette;        // Categorical: colour of value i (empty: Tableau-10)
     // Values only at the pixels that hold a sample (0 elsewhere, e.g. method A's radiance
     // points): viewers draw those pixels as points so that zooming out never hides them.
     bool sparse = false;

@@ -28,14 +28,8 @@ const std::vector<std::string>& render_method_names() {
 
 RenderMethod parse_render_method(const std::string& name) {
     const auto& names = render_method_names();
-    // All but the cache exist; it arrives with method A's third issue.
-    for (size_t i = 0; i < names.size(); ++i) {
-        if (name != names[i]) continue;
-        if (i <= 4) return RenderMethod(i);
-        throw Error("--method", name,
-                    "this method is not implemented yet (it lands with its issue); the "
-                    "implemented methods are: gbuffer, mis, reference, points, sparse");
-    }
+    for (size_t i = 0; i < names.size(); ++i)
+        if (name == names[i]) return RenderMethod(i);
     std::string list;
     for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
     throw Error("--method", name, "unknown method; expected one of: " + list);
@@ -50,6 +44,7 @@ SettingsGroup RenderConfig::settings_group() {
     g.bind(ReferenceSettings::schema(), &reference);
     g.bind(PointsSettings::schema(), &points);
     g.bind(SparseSettings::schema(), &sparse);
+    g.bind(CacheSettings::schema(), &cache);
     return g;
 }
 
@@ -61,6 +56,7 @@ int RenderConfig::spp() const {
             return reference.spp;
         case RenderMethod::Points:
         case RenderMethod::Sparse:
+        case RenderMethod::Cache:
             return points.max_samples;
         default:
             return 0;
@@ -96,7 +92,11 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
     std::string cache_key;
     if (config_.method == RenderMethod::Reference && config_.reference.use_cache) {
         RenderConfig copy = config_;
-        nlohmann::json settings = copy.settings_group().to_json();
+        // Only what the reference depends on: other methods' settings must not re-render it.
+        const nlohmann::json all = copy.settings_group().to_json();
+        nlohmann::json settings;
+        for (const char* group : {"frame", "gbuffer", "shading", "reference"})
+            settings[group] = all.at(group);
         settings["reference"].erase("use_cache");
         settings["frame"].erase("exposure");  // display only
         cache_key = cache_.key(scene_.content_hash, settings, frame);
@@ -128,7 +128,8 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
     nlohmann::json sparse_stats;
     // Method A's environment bandwidth hierarchy: built (or loaded) once, timed when used.
     const EnvBandwidthHierarchy* bw = nullptr;
-    if (config_.method == RenderMethod::Points || config_.method == RenderMethod::Sparse) {
+    if (config_.method == RenderMethod::Points || config_.method == RenderMethod::Sparse ||
+        config_.method == RenderMethod::Cache) {
         t0 = Clock::now();
         bw = bandwidth();
         stages["env_bandwidth"] = ms_since(t0);
@@ -150,10 +151,28 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
         stages["radiance_points"] = ms_since(t0);
         rays += out.rays;
         guarded = out.nonfinite;
-    } else if (config_.method == RenderMethod::Sparse) {
-        SparsePassOutput out =
-            render_sparse(ray_scene_, gb.gbuffer, frame, config_.frame, config_.shading,
-                          config_.points, config_.sparse, bw, result.layers, progress);
+    } else if (config_.method == RenderMethod::Sparse || config_.method == RenderMethod::Cache) {
+        const bool use_cache = config_.method == RenderMethod::Cache;
+        bool reset = false;
+        if (use_cache && frame != cache_state_.last_frame + 1) {
+            // Out of order (a scrub, a re-render): the cache starts afresh at this frame.
+            cache_state_.cache.reset(scene_.objects.size());
+            reset = cache_state_.last_frame >= 0;
+        }
+        if (use_cache && cache_state_.cache.object_count() != scene_.objects.size())
+            cache_state_.cache.reset(scene_.objects.size());
+        if (use_cache && keep_cache_details_)
+            result.cache_snapshot = std::make_shared<const RadianceCache>(cache_state_.cache);
+        const CacheHook hook{cache_state_, config_.cache};
+        SparsePassOutput out = render_sparse(ray_scene_, gb.gbuffer, frame, config_.frame,
+                                             config_.shading, config_.points, config_.sparse, bw,
+                                             result.layers, progress, use_cache ? &hook : nullptr);
+        if (use_cache) {
+            cache_state_.last_frame = frame;
+            out.stats["cache_reset"] = reset;
+            result.cache_records =
+                std::make_shared<const std::vector<CacheRecord>>(std::move(out.cache_records));
+        }
         for (const auto& [key, value] : out.stats["stages"].items()) stages[key] = value;
         out.stats.erase("stages");
         sparse_stats = std::move(out.stats);

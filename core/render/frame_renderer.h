@@ -12,8 +12,10 @@
 #include "base/job.h"
 #include "freq/env_bandwidth.h"
 #include "image/layers.h"
+#include "render/cache_pass.h"
 #include "render/radiance_point.h"
 #include "render/reference_cache.h"
+#include "settings/cache_settings.h"
 #include "settings/render_settings.h"
 #include "settings/settings_group.h"
 #include "settings/shading_settings.h"
@@ -35,6 +37,7 @@ struct RenderConfig {
     ReferenceSettings reference;
     PointsSettings points;
     SparseSettings sparse;
+    CacheSettings cache;
     int spp() const;  // the sample count of the chosen method (0 for gbuffer)
     // Methods with state across frames (method A's cache) must render frames in order.
     bool needs_previous_frames() const { return method == RenderMethod::Cache; }
@@ -47,6 +50,9 @@ struct FrameResult {
     float time_s = 0.0f;
     LayerSet layers;
     nlohmann::json stats;  // frame, time_s, time_ms, stages, rays, pixels_*, nonfinite
+    // Method cache: every entry's decision this frame (the inspector explains them).
+    std::shared_ptr<const std::vector<CacheRecord>> cache_records;
+    std::shared_ptr<const RadianceCache> cache_snapshot;  // entries before this frame's changes
 };
 
 class FrameRenderer {
@@ -54,6 +60,9 @@ class FrameRenderer {
     FrameRenderer(const Scene& scene, const RenderConfig& config, const EmbreeDevice& device);
     FrameResult render(int frame, Progress& progress);
     const RayScene& ray_scene() const { return ray_scene_; }
+    // Method cache: also return a copy of the cache as it was before each frame (for the
+    // inspector; costs a copy of the cache per frame).
+    void keep_cache_details(bool on) { keep_cache_details_ = on; }
     // The estimate of pixel (x, y) of `result` re-run with every sample traced, as text lines
     // (render/pixel_trace.cpp). Not while render() runs on another thread.
     // For method points, `point` (when given) receives the pixel's radiance point.
@@ -66,6 +75,8 @@ class FrameRenderer {
     RayScene ray_scene_;
     ReferenceCache cache_;
     std::unique_ptr<EnvBandwidthHierarchy> bandwidth_;  // method A: built on first use
+    CacheState cache_state_;                            // method A's cache across frames
+    bool keep_cache_details_ = false;
     const EnvBandwidthHierarchy* bandwidth();
 };
 

@@ -56,7 +56,13 @@ std::vector<std::string> FrameRenderer::trace_pixel(const FrameResult& r, int x,
              config.shading.mirror_depth);
         return out;
     }
-    if (config.method == RenderMethod::Sparse && r.layers.find("samples")) {
+    if (config.method == RenderMethod::Cache && r.cache_records)
+        for (const std::string& s :
+             cache_entries_near(*r.cache_records, r.cache_snapshot.get(), x, y, 1, r.layers.width(),
+                                config.cache, max_samples))
+            out.push_back(s);
+    if ((config.method == RenderMethod::Sparse || config.method == RenderMethod::Cache) &&
+        r.layers.find("samples")) {
         // Which radiance points the reconstruction used here, and with what weight (Eq. 6.2).
         const int w = r.layers.width(), h = r.layers.height();
         const double angle = radians_per_pixel(cam, w, h);

@@ -79,37 +79,52 @@ RadiancePointIntegrator::RadiancePointIntegrator(const RayScene& scene,
 RadiancePoint RadiancePointIntegrator::integrate_hit(const SurfaceHit& first, const vec3& first_wo,
                                                      const PointContext& context,
                                                      CounterRng& rng) const {
-    SurfaceHit hit = first;
-    vec3 wo = first_wo, throughput(1.0f);
-    PointContext ctx = context;
-    long rays = 0;
-    for (int depth = 0;; ++depth) {
-        const ShadingPoint sp = lighting_.shading_point(hit, wo);
-        if (sp.material->type != BrdfType::Mirror) {
-            if (depth > 0) ctx.curvature = 0.0;  // the screen-space estimate was the mirror's
-            RadiancePoint rp = integrate(sp, ctx, rng);
-            rp.radiance *= throughput;
-            rp.variance *= luminance(throughput) * luminance(throughput);
-            rp.rays += rays;
-            return rp;
-        }
-        RadiancePoint black;
-        black.rays = rays;
-        if (depth >= mirror_depth_) return black;
-        const vec3 r = reflect_about(wo, sp.shading_normal);
-        if (glm::dot(r, sp.geometric_normal) <= 0.0f) return black;
-        throughput *= sp.albedo;
-        const Ray ray{lighting_.offset_origin(sp.position, sp.geometric_normal), r};
-        hit = scene_.intersect(ray);
-        ++rays;
-        if (!hit.valid) {
+    const MirrorPath path = follow_mirrors(first, first_wo);
+    if (!path.hit.valid) {
+        RadiancePoint rp;
+        rp.rays = path.rays;
+        if (path.escaped) {
             const EnvironmentMap* env = scene_.scene().environment();
-            black.radiance = throughput * (env ? env->eval_smooth(r) : vec3(0.0f));
-            return black;
+            rp.radiance = path.throughput * (env ? env->eval_smooth(-path.wo) : vec3(0.0f));
         }
-        ctx.eye_distance += hit.distance;
-        ctx.object = hit.object;
-        wo = -r;
+        return rp;
+    }
+    PointContext ctx = context;
+    if (path.bounces > 0) {
+        ctx.curvature = 0.0;  // the screen-space estimate was the mirror's
+        ctx.eye_distance += path.extra_distance;
+        ctx.object = path.hit.object;
+    }
+    RadiancePoint rp = integrate(lighting_.shading_point(path.hit, path.wo), ctx, rng);
+    rp.radiance *= path.throughput;
+    rp.variance *= luminance(path.throughput) * luminance(path.throughput);
+    rp.rays += path.rays;
+    return rp;
+}
+
+MirrorPath RadiancePointIntegrator::follow_mirrors(const SurfaceHit& first,
+                                                   const vec3& first_wo) const {
+    MirrorPath path;
+    path.hit = first;
+    path.wo = first_wo;
+    for (int depth = 0;; ++depth) {
+        const ShadingPoint sp = lighting_.shading_point(path.hit, path.wo);
+        if (sp.material->type != BrdfType::Mirror) return path;
+        path.hit.valid = false;
+        if (depth >= mirror_depth_) return path;
+        const vec3 r = reflect_about(path.wo, sp.shading_normal);
+        if (glm::dot(r, sp.geometric_normal) <= 0.0f) return path;
+        path.throughput *= sp.albedo;
+        const Ray ray{lighting_.offset_origin(sp.position, sp.geometric_normal), r};
+        path.hit = scene_.intersect(ray);
+        ++path.rays;
+        ++path.bounces;
+        path.wo = -r;
+        if (!path.hit.valid) {
+            path.escaped = true;
+            return path;
+        }
+        path.extra_distance += path.hit.distance;
     }
 }
 

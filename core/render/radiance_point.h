@@ -73,6 +73,19 @@ struct PointBandwidths {
     double B_S = 0.0, B_x = 0.0, B_theta = 0.0;
 };
 
+// A pixel's chain of perfect mirrors: the first non-mirror hit (invalid when the chain escapes,
+// is cut by mirror_depth or reflects below a mirror), seen from `wo`, through `bounces` mirrors
+// whose albedos multiply into `throughput`.
+struct MirrorPath {
+    SurfaceHit hit;
+    vec3 wo{0.0f};
+    vec3 throughput{1.0f};
+    int bounces = 0;
+    long rays = 0;
+    bool escaped = false;         // left the scene towards the environment along -wo
+    double extra_distance = 0.0;  // path length after the first hit
+};
+
 class RadiancePointIntegrator {
   public:
     // `bandwidth` may be null (no environment map: B_L = 0).
@@ -87,6 +100,7 @@ class RadiancePointIntegrator {
     // sees the environment.
     RadiancePoint integrate_hit(const SurfaceHit& hit, const vec3& wo, const PointContext& context,
                                 CounterRng& rng) const;
+    MirrorPath follow_mirrors(const SurfaceHit& hit, const vec3& wo) const;
     const DirectLighting& lighting() const { return lighting_; }
     // B_L in the point's BRDF footprint (cycles/rad; 0 without an environment).
     double environment_bandwidth(const ShadingPoint& point) const;

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "render/cache_pass.h"
 #include "render/points_pass.h"
 #include "render/reconstruction.h"
 #include "render/sparse_sampling.h"
@@ -69,13 +70,14 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
                                const FrameSettings& fs, const ShadingSettings& shading,
                                const PointsSettings& points, const SparseSettings& sparse,
                                const EnvBandwidthHierarchy* bandwidth, LayerSet& layers,
-                               Progress& progress) {
+                               Progress& progress, const CacheHook* cache) {
     SparsePassOutput result;
     const int w = gb.width, h = gb.height;
     const size_t n = size_t(w) * h;
+    const Scene& scene = rs.scene();
     const RadiancePointIntegrator integrator(rs, shading, points, bandwidth);
     const DirectLighting& lighting = integrator.lighting();
-    const CameraRayGenerator camera(rs.scene().camera.at(rs.time()), w, h);
+    const CameraRayGenerator camera(scene.camera.at(rs.time()), w, h);
     const double pixel_angle = radians_per_pixel(camera, w, h);
 
     // Features of every pixel.
@@ -90,8 +92,11 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
         mirror[i] = shading_points[i].material->type == BrdfType::Mirror;
     }
 
+    // Per pixel: the fresh radiance point, or the reused cache record, and the value the
+    // reconstruction reads (demodulated by the texture; mirrors: the radiance itself).
     std::vector<RadiancePoint> point(n);
-    std::vector<char> sampled(n, 0);
+    std::vector<char> fresh(n, 0), sampled(n, 0);
+    std::vector<vec3> value(n, vec3(0.0f));
     std::vector<SampleKind> kind(n, SampleKind::None);
     std::atomic<long> rays{0};
     auto shade = [&](size_t i, uint64_t pass) {
@@ -103,8 +108,9 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
         rp.cone_samples.clear();
         rp.cone_samples.shrink_to_fit();
         rays.fetch_add(rp.rays, std::memory_order_relaxed);
+        value[i] = mirror[i] ? rp.radiance : demodulate(rp.radiance, shading_points[i].albedo);
         point[i] = std::move(rp);
-        sampled[i] = 1;
+        fresh[i] = sampled[i] = 1;
     };
     auto shade_all = [&](const std::vector<int>& pixels, uint64_t pass) {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels.size(), 16),
@@ -115,47 +121,126 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
                           });
     };
 
-    // 1. Initial uniform radiance points.
+    // 0. The cache: move, project and test every entry (all but the occlusion test).
     auto t0 = Clock::now();
+    CacheFrameView view;
+    std::vector<SurfaceHit> reflected;
+    std::vector<float> footprint;
+    std::vector<CacheRecord>& records = result.cache_records;
+    std::vector<int> standin(n, -1);  // initial pixels a kept entry stands in for
+    if (cache) {
+        reflected.resize(n);
+        footprint.resize(n);
+        tbb::parallel_for(size_t(0), n, [&](size_t i) {
+            footprint[i] = features[i].footprint;
+            if (mirror[i])
+                reflected[i] = integrator.follow_mirrors(gb.hits[i], -gb.view_dirs[i]).hit;
+        });
+        view.width = w;
+        view.height = h;
+        view.camera = &camera;
+        view.hits = &gb.hits;
+        view.footprint = &footprint;
+        view.reflected = &reflected;
+        view.time = rs.time();
+        for (size_t o = 0; o < scene.objects.size(); ++o)
+            view.to_world.push_back(rs.object_to_world(int(o)));
+        records = reproject_entries(cache->state.cache, view, cache->settings);
+        if (!scene_has_motion(scene))
+            standin = first_survivors(records, int(n), cache->state.cache);
+        result.stats["stages"]["reproject"] = ms_since(t0);
+    }
+
+    // 1. Initial uniform radiance points (or the kept entries standing in for them).
+    t0 = Clock::now();
     const int k = std::max(sparse.initial_stride, 1);
-    std::vector<int> initial;
+    std::vector<int> initial, initial_shaded;
     for (int y = k / 2; y < h; y += k)
-        for (int x = k / 2; x < w; x += k)
-            if (features[size_t(y) * w + x].valid) initial.push_back(y * w + x);
+        for (int x = k / 2; x < w; x += k) {
+            const int i = y * w + x;
+            if (!features[size_t(i)].valid) continue;
+            initial.push_back(i);
+            if (standin[size_t(i)] < 0) initial_shaded.push_back(i);
+        }
     progress.begin_stage("initial radiance points", 1);
-    shade_all(initial, 0);
-    for (int i : initial) kind[size_t(i)] = SampleKind::Initial;
+    shade_all(initial_shaded, 0);
+    for (int i : initial_shaded) kind[size_t(i)] = SampleKind::Initial;
     result.stats["stages"]["initial"] = ms_since(t0);
 
     // 2. Upsampled visibility statistics.
     t0 = Clock::now();
     std::vector<VisibilityStats> values;
+    std::vector<char> own(n, 0);  // the pixel's statistics are its own point's (or stand-in's)
+    std::vector<int> initial_slot(n, -1);
+    for (size_t i = 0; i < n; ++i) own[i] = fresh[i];
     for (int i : initial) {
-        const RadiancePoint& rp = point[size_t(i)];
-        values.push_back({rp.pilot_occluded > 0 ? 1.0f : 0.0f,
-                          float(std::log(std::max(rp.t_min, 1e-6))), float(rp.occlusion_ratio),
-                          float(rp.sigma_V)});
+        initial_slot[size_t(i)] = int(values.size());
+        if (fresh[size_t(i)]) {
+            const RadiancePoint& rp = point[size_t(i)];
+            values.push_back({rp.pilot_occluded > 0 ? 1.0f : 0.0f,
+                              float(std::log(std::max(rp.t_min, 1e-6))), float(rp.occlusion_ratio),
+                              float(rp.sigma_V)});
+        } else {
+            const CacheRecord& r = records[size_t(standin[size_t(i)])];
+            const CacheEntry e = cache->state.cache.object(r.object).get(r.slot);
+            values.push_back({e.occluded ? 1.0f : 0.0f,
+                              float(std::log(std::max(double(e.t_min), 1e-6))), e.occlusion_ratio,
+                              e.sigma_v});
+            own[size_t(i)] = 1;
+        }
     }
     std::vector<VisibilityStats> stats;
     std::vector<char> found;
     upsample_statistics(w, h, features, initial, values, k, stats, found);
+    std::vector<float> mu_v(n, 0.0f), sigma_v(n, 0.0f);
+    for (size_t i = 0; i < n; ++i) {
+        if (fresh[i]) {
+            mu_v[i] = float(point[i].occlusion_ratio);
+            sigma_v[i] = float(point[i].sigma_V);
+        } else if (own[i]) {
+            mu_v[i] = values[size_t(initial_slot[i])][2];
+            sigma_v[i] = values[size_t(initial_slot[i])][3];
+        } else if (found[i]) {
+            mu_v[i] = stats[i][2];
+            sigma_v[i] = stats[i][3];
+        }
+    }
     result.stats["stages"]["upsample"] = ms_since(t0);
+
+    // 2b. The cache: the occlusion test against this frame's statistics, then one entry per
+    // pixel (merging the others where the rule allows).
+    std::vector<int> keeper(n, -1), reused;
+    std::vector<float> age(n, 0.0f), field(n, 0.0f);
+    if (cache) {
+        t0 = Clock::now();
+        for (size_t i = 0; i < n; ++i) field[i] = found[i] ? stats[i][2] : mu_v[i];
+        apply_occlusion_test(records, field, found, cache->settings);
+        keeper = resolve_pixels(records, cache->state.cache, view, cache->settings);
+        for (size_t i = 0; i < n; ++i) {
+            if (keeper[i] < 0 || fresh[i]) continue;
+            const CacheRecord& r = records[size_t(keeper[i])];
+            const CacheEntry e = cache->state.cache.object(r.object).get(r.slot);
+            value[i] = e.shading;
+            if (!found[i] && !own[i]) {  // as for new points: upsampled where known, else own
+                mu_v[i] = e.occlusion_ratio;
+                sigma_v[i] = e.sigma_v;
+            }
+            age[i] = float(r.tests.age);
+            sampled[i] = 1;
+            reused.push_back(int(i));
+        }
+        result.stats["stages"]["reproject"] =
+            result.stats["stages"]["reproject"].get<double>() + ms_since(t0);
+    }
 
     // 3. Density from the per-pixel screen-space bandwidth.
     t0 = Clock::now();
     const std::vector<float> to_edge = distance_to_object_edge(w, h, features);
-    std::vector<float> density(n, 0.0f), mu_v(n, 0.0f), sigma_v(n, 0.0f), radius(n, 1.0f);
+    std::vector<float> density(n, 0.0f), radius(n, 1.0f);
     tbb::parallel_for(0, h, [&](int y) {
         for (int x = 0; x < w; ++x) {
             const size_t i = size_t(y) * w + x;
             if (!features[i].valid) continue;
-            if (sampled[i]) {
-                mu_v[i] = float(point[i].occlusion_ratio);
-                sigma_v[i] = float(point[i].sigma_V);
-            } else if (found[i]) {
-                mu_v[i] = stats[i][2];
-                sigma_v[i] = stats[i][3];
-            }
             if (mirror[i] || !found[i]) {
                 density[i] = 1.0f;  // followed reflections; or no statistics to predict from
             } else {
@@ -176,17 +261,30 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
     });
     result.stats["stages"]["density"] = ms_since(t0);
 
-    // 4. Rejection sampling and the adaptive radiance points.
+    // 4. Rejection sampling (of what reused entries leave uncovered) and the adaptive points.
     t0 = Clock::now();
+    const std::vector<float> coverage =
+        cache ? splat_coverage(w, h, reused, density, features) : std::vector<float>();
     std::vector<int> adaptive;
     for (size_t i = 0; i < n; ++i) {
         if (!features[i].valid || sampled[i]) continue;
-        CounterRng rng(uint64_t(fs.seed) ^ kSparseStream, uint64_t(frame), i, 0);
-        if (rejection_sample(density[i], rng)) adaptive.push_back(int(i));
+        const float wanted = cache ? std::max(density[i] - coverage[i], 0.0f) : density[i];
+        CounterRng rng(uint64_t(fs.seed) ^ kSparseStream, cache ? 0 : uint64_t(frame), i, 0);
+        if (rejection_sample(wanted, rng)) adaptive.push_back(int(i));
     }
     progress.begin_stage("adaptive radiance points", 1);
     shade_all(adaptive, 1);
+    // Adaptive points keep the upsampled statistics as their reconstruction features (they
+    // were chosen from them); only where none reached do they use their own.
+    auto own_features_where_unknown = [&](const std::vector<int>& pixels) {
+        for (int i : pixels)
+            if (!found[size_t(i)]) {
+                mu_v[size_t(i)] = float(point[size_t(i)].occlusion_ratio);
+                sigma_v[size_t(i)] = float(point[size_t(i)].sigma_V);
+            }
+    };
     for (int i : adaptive) kind[size_t(i)] = SampleKind::Adaptive;
+    own_features_where_unknown(adaptive);
     result.stats["stages"]["shade"] = ms_since(t0);
 
     // 5. Reconstruction of the demodulated shading; fallbacks are shaded, then the texture.
@@ -201,20 +299,65 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
     in.sigma_v = sigma_v;
     in.radius = radius;
     in.sampled = sampled;
-    in.value.assign(n, vec3(0.0f));
-    for (size_t i = 0; i < n; ++i)
-        if (sampled[i]) in.value[i] = demodulate(point[i].radiance, shading_points[i].albedo);
+    in.value = value;
     ReconstructionOutput rec = reconstruct(in, sparse);
     std::vector<int> fallback;
     for (size_t i = 0; i < n; ++i)
         if (rec.fallback[i]) fallback.push_back(int(i));
     shade_all(fallback, 2);
-    for (int i : fallback) {
-        kind[size_t(i)] = SampleKind::Fallback;
-        rec.value[size_t(i)] =
-            demodulate(point[size_t(i)].radiance, shading_points[size_t(i)].albedo);
+    if (!fallback.empty()) {
+        // The fallback points are samples too: reconstruct again with them, so that a pixel
+        // near one sees it now as it will when the point is reused from the cache.
+        for (int i : fallback) kind[size_t(i)] = SampleKind::Fallback;
+        own_features_where_unknown(fallback);
+        in.mu_v = mu_v;
+        in.sigma_v = sigma_v;
+        in.sampled = sampled;
+        in.value = value;
+        const long fallback_pixels = rec.fallback_pixels;
+        rec = reconstruct(in, sparse);
+        rec.fallback_pixels = fallback_pixels;
     }
     result.stats["stages"]["reconstruct"] = ms_since(t0);
+
+    // 6. The cache: batch discard, then every new point becomes an entry.
+    if (cache) {
+        t0 = Clock::now();
+        RadianceCache& rc = cache->state.cache;
+        const std::vector<long> counts = commit_decisions(records, rc);
+        std::vector<std::vector<size_t>> by_object(scene.objects.size());
+        for (size_t i = 0; i < n; ++i)
+            if (fresh[i]) by_object[size_t(gb.hits[i].object)].push_back(i);
+        for (size_t o = 0; o < by_object.size(); ++o) {
+            ObjectCache& oc = rc.object(int(o));
+            oc.reserve_for(by_object[o].size());
+            const bool moving = !scene.objects[o].animation.is_static();
+            for (size_t i : by_object[o]) {
+                const SurfaceHit& refl = reflected[i];
+                oc.insert(make_cache_entry(
+                    gb.hits[i], gb.view_dirs[i], view.to_world[o], point[i], value[i], field[i],
+                    mirror[i], refl, refl.valid ? &view.to_world[size_t(refl.object)] : nullptr,
+                    moving, rs.time()));
+            }
+        }
+        const long evicted = rc.evict_oldest(size_t(double(cache->settings.max_megabytes) * 1e6));
+        result.stats["stages"]["insert"] = ms_since(t0);
+        nlohmann::json cs = cache_stats(counts, rc);
+        for (const auto& [key, v] : cs.items()) result.stats[key] = v;
+        result.stats["evicted"] = evicted;
+        result.stats["pixels_reused"] = long(reused.size());
+        result.stats["pixels_standin"] = long(initial.size() - initial_shaded.size());
+        std::vector<PixelDecision> decision(n, PixelDecision::None);
+        for (size_t i = 0; i < n; ++i) {
+            if (kind[i] != SampleKind::None)
+                decision[i] = kind[i] == SampleKind::Initial    ? PixelDecision::NewInitial
+                              : kind[i] == SampleKind::Adaptive ? PixelDecision::NewAdaptive
+                                                                : PixelDecision::NewFallback;
+            else if (sampled[i])
+                decision[i] = PixelDecision::Reused;
+        }
+        add_cache_layers(layers, decision, age, records);
+    }
 
     // Layers.
     Layer& color = layers.add("color", LayerKind::Color, 3,
@@ -223,7 +366,7 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
         layers.add("density", LayerKind::Continuous, 1, "sampling density (samples per pixel)");
     Layer& sampled_layer =
         layers.add("sampled", LayerKind::Categorical, 1, "radiance points by origin");
-    sampled_layer.legend = {"none", "initial", "adaptive", "fallback"};
+    sampled_layer.legend = {"none", "initial", "adaptive", "fallback", "reused"};
     sampled_layer.sparse = true;
     Layer& weight_layer =
         layers.add("recon_weight", LayerKind::Continuous, 1, "sum of reconstruction weights");
@@ -245,9 +388,9 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
     for (size_t i = 0; i < n; ++i) {
         vec3 c(0.0f);
         if (!features[i].valid)
-            c = rs.scene().background(gb.view_dirs[i]);
+            c = scene.background(gb.view_dirs[i]);
         else if (mirror[i])
-            c = point[i].radiance;
+            c = sampled[i] ? value[i] : rec.value[i];
         else
             c = rec.value[i] * shading_points[i].albedo;
         if (!std::isfinite(c.x + c.y + c.z)) {
@@ -256,14 +399,18 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
         }
         for (int ch = 0; ch < 3; ++ch) color.data[3 * i + size_t(ch)] = c[ch];
         density_layer.data[i] = density[i];
-        sampled_layer.data[i] = float(int(kind[i]));
+        sampled_layer.data[i] = float(kind[i] != SampleKind::None ? int(kind[i])
+                                      : sampled[i]                ? 4
+                                                                  : 0);
         weight_layer.data[i] = rec.weight[i];
         radius_layer.data[i] = rec.radius_used[i];
         mu_layer.data[i] = mu_v[i];
         sigma_layer.data[i] = sigma_v[i];
         if (!sampled[i]) continue;
+        const vec3 own = mirror[i] ? value[i] : value[i] * shading_points[i].albedo;
+        for (int ch = 0; ch < 3; ++ch) sample_layer.data[3 * i + size_t(ch)] = own[ch];
+        if (!fresh[i]) continue;
         const RadiancePoint& rp = point[i];
-        for (int ch = 0; ch < 3; ++ch) sample_layer.data[3 * i + size_t(ch)] = rp.radiance[ch];
         ray_layer.data[i] = float(rp.rays);
         const std::array<double, 10> v = radiance_point_fields(rp);
         for (size_t c2 = 0; c2 < part1.size(); ++c2)
@@ -272,11 +419,12 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
     result.rays = rays.load();
     result.nonfinite = nonfinite;
     long shaded = 0;
-    for (char s : sampled) shaded += s;
-    result.stats["pixels_initial"] = long(initial.size());
+    for (char s : fresh) shaded += s;
+    result.stats["pixels_initial"] = long(initial_shaded.size());
     result.stats["pixels_adaptive"] = long(adaptive.size());
     result.stats["fallback_pixels"] = rec.fallback_pixels;
     result.stats["pixels_shaded"] = shaded;
+    result.stats["pixels_new"] = shaded;
     return result;
 }
 

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "freq/env_bandwidth.h"
+#include "render/cache_pass.h"
 #include "render/gbuffer.h"
 #include "render/radiance_point.h"
 #include "settings/sparse_settings.h"
@@ -25,15 +26,24 @@ struct SparsePassOutput {
     long nonfinite = 0;
     nlohmann::json
         stats;  // pixels_initial, pixels_adaptive, pixels_shaded, fallback_pixels, stage ms
+    std::vector<CacheRecord> cache_records;  // with the cache: every entry's decision
+};
+
+// With a cache (`--method cache`) the pipeline reuses, discards and inserts entries at the
+// steps of Algorithm 1 (render/cache_pass.h); without, it is the no-cache baseline.
+struct CacheHook {
+    CacheState& state;
+    const CacheSettings& settings;
 };
 
 SparsePassOutput render_sparse(const RayScene& scene, const GBuffer& gbuffer, int frame,
                                const FrameSettings& frame_settings, const ShadingSettings& shading,
                                const PointsSettings& points, const SparseSettings& sparse,
                                const EnvBandwidthHierarchy* bandwidth, LayerSet& layers,
-                               Progress& progress);
+                               Progress& progress, const CacheHook* cache = nullptr);
 
 // The `sampled` layer's categories.
+// (The layer adds 4 = reused for the cache's entries.)
 enum class SampleKind : int { None = 0, Initial = 1, Adaptive = 2, Fallback = 3 };
 
 constexpr uint64_t kSparseStream = 0x5350415253ULL;  // "SPARS": rejection sampling

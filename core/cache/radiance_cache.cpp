@@ -1,0 +1,198 @@
+#include "cache/radiance_cache.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Imath/half.h>
+
+namespace freqlab {
+
+namespace {
+
+enum Flags : uint8_t { kLive = 1, kMoving = 2, kOccluded = 4, kMirror = 8 };
+
+}  // namespace
+
+vec2 octahedral_encode(const vec3& n) {
+    const float l1 = std::abs(n.x) + std::abs(n.y) + std::abs(n.z);
+    vec2 p(n.x / l1, n.y / l1);
+    if (n.z < 0.0f) {
+        const vec2 folded((1.0f - std::abs(p.y)) * (p.x >= 0.0f ? 1.0f : -1.0f),
+                          (1.0f - std::abs(p.x)) * (p.y >= 0.0f ? 1.0f : -1.0f));
+        p = folded;
+    }
+    return p;
+}
+
+vec3 octahedral_decode(const vec2& e) {
+    vec3 n(e.x, e.y, 1.0f - std::abs(e.x) - std::abs(e.y));
+    if (n.z < 0.0f) {
+        const float x = (1.0f - std::abs(e.y)) * (e.x >= 0.0f ? 1.0f : -1.0f);
+        const float y = (1.0f - std::abs(e.x)) * (e.y >= 0.0f ? 1.0f : -1.0f);
+        n.x = x;
+        n.y = y;
+    }
+    return glm::normalize(n);
+}
+
+uint32_t octahedral_encode_half(const vec3& n) {
+    const vec2 e = octahedral_encode(n);
+    return uint32_t(Imath::half(e.x).bits()) | (uint32_t(Imath::half(e.y).bits()) << 16);
+}
+
+vec3 octahedral_decode_half(uint32_t packed) {
+    Imath::half x, y;
+    x.setBits(uint16_t(packed & 0xffffu));
+    y.setBits(uint16_t(packed >> 16));
+    return octahedral_decode(vec2(float(x), float(y)));
+}
+
+size_t ObjectCache::bytes_per_slot() {
+    return 4 * sizeof(vec3) + sizeof(vec2) + 2 * sizeof(uint32_t) + 8 * sizeof(float) +
+           sizeof(uint16_t) + sizeof(int16_t) + sizeof(uint8_t);
+}
+
+size_t ObjectCache::bytes() const {
+    return capacity() * bytes_per_slot() + free_.capacity() * sizeof(int32_t);
+}
+
+void ObjectCache::grow_to(size_t n) {
+    const size_t old = capacity();
+    if (n <= old) return;
+    for (auto* v : {&position_, &created_position_, &shading_, &reflected_position_}) v->resize(n);
+    view_.resize(n);
+    normal_.resize(n);
+    reflected_normal_.resize(n);
+    for (auto* v :
+         {&created_, &B_x_, &B_theta_, &B_t_, &occlusion_, &occlusion_field_, &sigma_v_, &t_min_})
+        v->resize(n);
+    weight_.resize(n);
+    reflected_object_.resize(n, -1);
+    flags_.resize(n, 0);
+    // Lowest slots first out of the free list (it is popped from the back).
+    for (size_t s = n; s-- > old;) free_.push_back(int32_t(s));
+    ++reallocations_;
+}
+
+void ObjectCache::reserve_for(size_t count) {
+    if (free_.size() >= count) return;
+    const size_t needed = live_count_ + count;
+    grow_to(std::max(needed, size_t(std::ceil(1.5 * double(capacity())))));
+}
+
+int ObjectCache::insert(const CacheEntry& e) {
+    if (free_.empty()) reserve_for(1);
+    const int s = free_.back();
+    free_.pop_back();
+    const size_t i = size_t(s);
+    position_[i] = e.position;
+    created_position_[i] = e.created_position;
+    view_[i] = octahedral_encode(e.view);
+    normal_[i] = octahedral_encode_half(e.normal);
+    shading_[i] = e.shading;
+    weight_[i] = Imath::half(std::min(e.weight, 6e4f)).bits();
+    created_[i] = e.created;
+    B_x_[i] = e.B_x;
+    B_theta_[i] = e.B_theta;
+    B_t_[i] = e.B_t;
+    occlusion_[i] = e.occlusion_ratio;
+    occlusion_field_[i] = e.occlusion_field;
+    sigma_v_[i] = e.sigma_v;
+    t_min_[i] = e.t_min;
+    flags_[i] = uint8_t(kLive | (e.moving ? kMoving : 0) | (e.occluded ? kOccluded : 0) |
+                        (e.mirror ? kMirror : 0));
+    reflected_object_[i] = int16_t(e.reflected_object);
+    reflected_position_[i] = e.reflected_position;
+    reflected_normal_[i] = octahedral_encode_half(e.reflected_normal);
+    ++live_count_;
+    return s;
+}
+
+CacheEntry ObjectCache::get(int slot) const {
+    const size_t i = size_t(slot);
+    CacheEntry e;
+    e.position = position_[i];
+    e.created_position = created_position_[i];
+    e.view = octahedral_decode(view_[i]);
+    e.normal = octahedral_decode_half(normal_[i]);
+    e.shading = shading_[i];
+    Imath::half weight;
+    weight.setBits(weight_[i]);
+    e.weight = float(weight);
+    e.created = created_[i];
+    e.B_x = B_x_[i];
+    e.B_theta = B_theta_[i];
+    e.B_t = B_t_[i];
+    e.occlusion_ratio = occlusion_[i];
+    e.occlusion_field = occlusion_field_[i];
+    e.sigma_v = sigma_v_[i];
+    e.t_min = t_min_[i];
+    e.moving = flags_[i] & kMoving;
+    e.occluded = flags_[i] & kOccluded;
+    e.mirror = flags_[i] & kMirror;
+    e.reflected_object = reflected_object_[i];
+    e.reflected_position = reflected_position_[i];
+    e.reflected_normal = octahedral_decode_half(reflected_normal_[i]);
+    return e;
+}
+
+void ObjectCache::set_value(int slot, const vec3& shading, float weight) {
+    shading_[size_t(slot)] = shading;
+    weight_[size_t(slot)] = Imath::half(std::min(weight, 6e4f)).bits();
+}
+
+void ObjectCache::remove(const std::vector<int>& slots) {
+    for (int s : slots) {
+        if (!live(s)) continue;
+        flags_[size_t(s)] = 0;
+        free_.push_back(s);
+        --live_count_;
+    }
+}
+
+void RadianceCache::reset(size_t objects) {
+    objects_.clear();
+    objects_.resize(objects);
+}
+
+size_t RadianceCache::live_count() const {
+    size_t n = 0;
+    for (const ObjectCache& c : objects_) n += c.live_count();
+    return n;
+}
+
+size_t RadianceCache::bytes() const {
+    size_t n = 0;
+    for (const ObjectCache& c : objects_) n += c.bytes();
+    return n;
+}
+
+long RadianceCache::evict_oldest(size_t max_bytes) {
+    const size_t per = ObjectCache::bytes_per_slot();
+    const size_t have = live_count() * per;
+    if (have <= max_bytes) return 0;
+    const size_t excess = (have - max_bytes + per - 1) / per;
+    struct Aged {
+        float created;
+        int object, slot;
+    };
+    std::vector<Aged> all;
+    all.reserve(live_count());
+    for (size_t o = 0; o < objects_.size(); ++o)
+        for (size_t s = 0; s < objects_[o].capacity(); ++s)
+            if (objects_[o].live(int(s)))
+                all.push_back({objects_[o].created_times()[s], int(o), int(s)});
+    const size_t k = std::min(excess, all.size());
+    std::nth_element(
+        all.begin(), all.begin() + long(k), all.end(), [](const Aged& a, const Aged& b) {
+            return a.created != b.created
+                       ? a.created < b.created
+                       : (a.object != b.object ? a.object < b.object : a.slot < b.slot);
+        });
+    std::vector<std::vector<int>> drop(objects_.size());
+    for (size_t i = 0; i < k; ++i) drop[size_t(all[i].object)].push_back(all[i].slot);
+    for (size_t o = 0; o < objects_.size(); ++o) objects_[o].remove(drop[o]);
+    return long(k);
+}
+
+}  // namespace freqlab

@@ -1,0 +1,45 @@
+#include "settings/cache_settings.h"
+
+namespace freqlab {
+
+const SettingsSchema& CacheSettings::schema() {
+    static const SettingsSchema s =
+        SchemaBuilder<CacheSettings>("cache", "Radiance cache")
+            .field(&CacheSettings::q_eps_x, "q_eps_x", 1e-9, 1, "", kInvalidatesCache,
+                   "Spatial quality threshold: a cached point stays valid within r_x = 2 pi "
+                   "acos(1 - q) / B_x of where it was computed (seed §5.2; 1e-4 in §7).")
+            .field(&CacheSettings::q_eps_theta, "q_eps_theta", 1e-9, 1, "", kInvalidatesCache,
+                   "Angular quality threshold: the view may move r_theta = 2 pi acos(1 - q) / "
+                   "B_theta away from the view it was computed for (seed §5.2; 1e-4 in §7).")
+            .field(&CacheSettings::q_eps_t, "q_eps_t", 1e-12, 1, "", kInvalidatesCache,
+                   "Temporal quality threshold: lifespan 2 pi acos(1 - q) / B_t (seed §5.2-5.3; "
+                   "1e-7 in §7).")
+            .field(&CacheSettings::occlusion_threshold, "occlusion_threshold", 0, 1, "",
+                   kInvalidatesCache,
+                   "A cached point whose occlusion ratio differs from the one measured at its "
+                   "pixel by more than this is discarded (seed §5.3: 0.125).")
+            .field(&CacheSettings::test_spatial, "test_spatial", 0, 1, "", kInvalidatesCache,
+                   "Ablation: the spatial validity test (r_x).")
+            .field(&CacheSettings::test_angular, "test_angular", 0, 1, "", kInvalidatesCache,
+                   "Ablation: the angular validity test (r_theta).")
+            .field(&CacheSettings::test_temporal, "test_temporal", 0, 1, "", kInvalidatesCache,
+                   "Ablation: the temporal lifespan test (B_t); off reproduces the seed's "
+                   "Fig. 14 failure (stale shadows of moving occluders).")
+            .field(&CacheSettings::test_occlusion, "test_occlusion", 0, 1, "", kInvalidatesCache,
+                   "Ablation: the occlusion-ratio test.")
+            .field(&CacheSettings::merge, "merge", 0, 1, "", kInvalidatesCache,
+                   "Merge valid cached points that land on one pixel when each lies inside the "
+                   "other's spatial and angular validity (seed §5.2, Fig. 13).")
+            .field(&CacheSettings::depth_tolerance, "depth_tolerance", 1e-5, 1, "",
+                   kInvalidatesCache,
+                   "Z-buffer test: relative depth difference between a reprojected point and "
+                   "the surface seen at its pixel that still counts as visible.")
+            .field(&CacheSettings::max_megabytes, "max_megabytes", 1, 65536, "MB",
+                   kInvalidatesCache,
+                   "Memory cap of all caches together; beyond it the oldest entries are "
+                   "evicted after each frame.")
+            .build();
+    return s;
+}
+
+}  // namespace freqlab

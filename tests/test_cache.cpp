@@ -1,0 +1,279 @@
+// Method A's object-space radiance cache (issue "Method A, part 3", acceptance 1 and 2): one
+// constructed case per decision; merging keeps the weighted radiance; free slots and growth
+// keep every live entry intact; a static scene's second frame shades nothing and matches.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "cache/reprojection.h"
+#include "render/frame_renderer.h"
+#include "scene/scene_loader.h"
+
+using namespace freqlab;
+
+namespace {
+
+// An 8 x 8 image of a wall y = 5 (object 0; the right column is object 1) seen from the origin.
+struct WallView {
+    static constexpr int w = 8, h = 8;
+    CameraPose pose;
+    CameraRayGenerator camera;
+    std::vector<SurfaceHit> hits;
+    std::vector<float> footprint;
+    std::vector<SurfaceHit> reflected;
+    CacheFrameView view;
+
+    WallView()
+        : pose{vec3(0.0f), vec3(0.0f, 5.0f, 0.0f), vec3(0.0f, 0.0f, 1.0f), 40.0f},
+          camera(pose, w, h),
+          hits(w * h),
+          footprint(w * h, 0.01f),
+          reflected(w * h) {
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const vec3 d = camera.direction((x + 0.5f) / w, (y + 0.5f) / h);
+                SurfaceHit& s = hits[size_t(y * w + x)];
+                s.valid = true;
+                s.distance = 5.0f / d.y;
+                s.position = d * s.distance;
+                s.object = x == w - 1 ? 1 : 0;
+                s.geometric_normal = s.shading_normal = vec3(0.0f, -1.0f, 0.0f);
+            }
+        view.width = w;
+        view.height = h;
+        view.camera = &camera;
+        view.hits = &hits;
+        view.footprint = &footprint;
+        view.reflected = &reflected;
+        view.to_world = {mat4(1.0f), mat4(1.0f)};
+        view.time = 1.0f;
+    }
+    const SurfaceHit& at(int x, int y) const { return hits[size_t(y * w + x)]; }
+    // An entry computed at pixel (x, y) at time `created`, seen from the camera.
+    CacheEntry entry_at(int x, int y, float created = 1.0f) const {
+        CacheEntry e;
+        e.position = e.created_position = at(x, y).position;
+        e.view = glm::normalize(-e.position);
+        e.normal = vec3(0.0f, -1.0f, 0.0f);
+        e.shading = vec3(0.5f);
+        e.created = created;
+        return e;
+    }
+};
+
+CacheDecision decide_one(const WallView& wall, const CacheEntry& e, int object = 0,
+                         const CacheSettings& s = CacheSettings{}, CacheTestValues* out = nullptr) {
+    RadianceCache cache;
+    cache.reset(2);
+    cache.object(object).insert(e);
+    std::vector<CacheRecord> records = reproject_entries(cache, wall.view, s);
+    EXPECT_EQ(records.size(), 1u);
+    if (out) *out = records[0].tests;
+    return records[0].decision;
+}
+
+}  // namespace
+
+TEST(CacheDecisions, OneConstructedCasePerReason) {
+    const WallView wall;
+    const CacheSettings s;
+    EXPECT_EQ(decide_one(wall, wall.entry_at(3, 4)), CacheDecision::Reused);
+
+    CacheEntry behind = wall.entry_at(3, 4);
+    behind.position = vec3(0.0f, -2.0f, 0.0f);
+    EXPECT_EQ(decide_one(wall, behind), CacheDecision::DiscardFrustum);
+    CacheEntry off_screen = wall.entry_at(3, 4);
+    off_screen.position = vec3(40.0f, 5.0f, 0.0f);
+    EXPECT_EQ(decide_one(wall, off_screen), CacheDecision::DiscardFrustum);
+
+    // Lands on the column of object 1; and in front of the wall (hidden by nothing but at the
+    // wrong depth: the wall is what the pixel sees).
+    EXPECT_EQ(decide_one(wall, wall.entry_at(7, 2)), CacheDecision::DiscardZbuffer);
+    CacheEntry in_front = wall.entry_at(3, 4);
+    in_front.position *= 0.8f;
+    EXPECT_EQ(decide_one(wall, in_front), CacheDecision::DiscardZbuffer);
+
+    // Computed 0.05 away from where the pixel now sees the wall; B_x gives r_x = 0.0089.
+    CacheEntry moved = wall.entry_at(3, 4);
+    moved.created_position += vec3(0.05f, 0.0f, 0.0f);
+    moved.B_x = 10.0f;
+    CacheTestValues v;
+    EXPECT_EQ(decide_one(wall, moved, 0, s, &v), CacheDecision::DiscardSpatial);
+    EXPECT_NEAR(v.r_x, 2 * M_PI * std::acos(1 - 1e-4) / 10.0, 1e-9);
+    EXPECT_NEAR(v.spatial_distance, 0.05, 1e-5);
+    moved.B_x = 0.5f;  // r_x = 0.178: inside
+    EXPECT_EQ(decide_one(wall, moved), CacheDecision::Reused);
+
+    // The view it was computed for is ~2 degrees off; r_theta = 1.02 deg at B_theta = 5.
+    CacheEntry turned = wall.entry_at(3, 4);
+    const vec3 original = turned.view;
+    turned.view = glm::normalize(
+        vec3(glm::rotate(mat4(1.0f), glm::radians(2.0f), vec3(0, 0, 1)) * vec4(original, 0.0f)));
+    turned.B_theta = 5.0f;
+    EXPECT_EQ(decide_one(wall, turned, 0, s, &v), CacheDecision::DiscardAngular);
+    EXPECT_NEAR(v.angular_distance, std::acos(double(glm::dot(original, turned.view))), 1e-5);
+    EXPECT_GT(v.angular_distance, glm::radians(1.9));
+    EXPECT_NEAR(v.r_theta, 2 * M_PI * std::acos(1 - 1e-4) / 5.0, 1e-9);
+    turned.B_theta = 0.5f;  // r_theta = 10.2 deg
+    EXPECT_EQ(decide_one(wall, turned), CacheDecision::Reused);
+
+    // Lifespan 2 pi acos(1 - 1e-7) / B_t = 2.8e-3 s at B_t = 1; the entry is 0.5 s old.
+    CacheEntry old = wall.entry_at(3, 4, 0.5f);
+    old.B_t = 1.0f;
+    EXPECT_EQ(decide_one(wall, old, 0, s, &v), CacheDecision::DiscardTemporal);
+    EXPECT_NEAR(v.lifespan, 2 * M_PI * std::acos(1 - 1e-7) / 1.0, 1e-9);
+    old.B_t = 0.0f;  // nothing moving near it: an infinite lifespan
+    EXPECT_EQ(decide_one(wall, old), CacheDecision::Reused);
+
+    // Each test can be switched off (ablation).
+    CacheSettings off;
+    off.test_spatial = off.test_temporal = false;
+    moved.B_x = 10.0f;
+    old.B_t = 1.0f;
+    EXPECT_EQ(decide_one(wall, moved, 0, off), CacheDecision::Reused);
+    EXPECT_EQ(decide_one(wall, old, 0, off), CacheDecision::Reused);
+
+    // Occlusion: the upsampled occlusion ratio at its pixel was 0.1 when computed, now 0.4.
+    RadianceCache cache;
+    cache.reset(2);
+    CacheEntry shadowed = wall.entry_at(3, 4);
+    shadowed.occlusion_field = 0.1f;
+    cache.object(0).insert(shadowed);
+    CacheEntry same = wall.entry_at(5, 4);
+    same.occlusion_field = 0.35f;
+    cache.object(0).insert(same);
+    std::vector<CacheRecord> records = reproject_entries(cache, wall.view, s);
+    std::vector<float> field(WallView::w * WallView::h, 0.4f);
+    std::vector<char> known(field.size(), 1);
+    apply_occlusion_test(records, field, known, s);
+    EXPECT_EQ(records[0].decision, CacheDecision::DiscardOcclusion);
+    EXPECT_EQ(records[1].decision, CacheDecision::Reused);
+    const std::vector<std::string> why = explain(records[0].tests, 0, s);
+    EXPECT_NE(why.back().find("differs by more than 0.125"), std::string::npos) << why.back();
+}
+
+TEST(CacheDecisions, MergingKeepsTheWeightedRadianceAndOnlyWithinBothRadii) {
+    const WallView wall;
+    CacheSettings s;
+    RadianceCache cache;
+    cache.reset(2);
+    CacheEntry a = wall.entry_at(3, 4, 1.0f), b = wall.entry_at(3, 4, 0.9f),
+               c = wall.entry_at(3, 4, 0.8f);
+    a.shading = vec3(1.0f, 2.0f, 3.0f), a.weight = 8.0f;
+    b.shading = vec3(3.0f, 2.0f, 1.0f), b.weight = 24.0f;
+    // c sits 0.004 to the side (still on pixel (3, 4)) with B_x = 10: r_x = 0.0089 contains it,
+    // but with B_x = 40 (r_x = 0.0022) it does not, and it stays unmerged.
+    c.position += vec3(0.004f, 0.0f, 0.0f);
+    c.B_x = 40.0f;
+    const int sa = cache.object(0).insert(a);
+    cache.object(0).insert(b);
+    cache.object(0).insert(c);
+    std::vector<CacheRecord> records = reproject_entries(cache, wall.view, s);
+    for (const CacheRecord& r : records) ASSERT_EQ(r.pixel, 4 * WallView::w + 3);
+    const std::vector<int> keeper = resolve_pixels(records, cache, wall.view, s);
+    const CacheRecord& kept = records[size_t(keeper[size_t(4 * WallView::w + 3)])];
+    EXPECT_EQ(kept.slot, sa);  // the youngest
+    EXPECT_EQ(records[1].decision, CacheDecision::Merged);
+    EXPECT_EQ(records[2].decision, CacheDecision::Reused);  // outside c's own r_x
+    const CacheEntry merged = cache.object(0).get(sa);
+    const vec3 expected = (8.0f * a.shading + 24.0f * b.shading) / 32.0f;
+    EXPECT_NEAR(merged.shading.x, expected.x, 1e-6);
+    EXPECT_NEAR(merged.shading.z, expected.z, 1e-6);
+    EXPECT_FLOAT_EQ(merged.weight, 32.0f);
+    // Energy: weight x radiance is conserved by the merge.
+    EXPECT_NEAR(merged.weight * merged.shading.y, 8.0f * 2.0f + 24.0f * 2.0f, 1e-4);
+    const std::vector<long> counts = commit_decisions(records, cache);
+    EXPECT_EQ(counts[size_t(CacheDecision::Merged)], 1);
+    EXPECT_EQ(cache.live_count(), 2u);
+}
+
+TEST(RadianceCacheStorage, FreeSlotsAndGrowthKeepEveryLiveEntry) {
+    ObjectCache c;
+    std::vector<CacheEntry> truth;
+    std::vector<int> slot;
+    auto make = [](int k) {
+        CacheEntry e;
+        e.position = vec3(float(k), 0.5f * k, -1.0f);
+        e.created_position = e.position + 1.0f;
+        e.view = glm::normalize(vec3(1.0f, float(k % 7) - 3.0f, 0.3f));
+        e.shading = vec3(0.01f * k);
+        e.created = float(k);
+        e.B_x = float(k) + 0.5f;
+        e.occlusion_field = 0.001f * k;
+        e.mirror = k % 3 == 0;
+        e.reflected_object = k % 5;
+        return e;
+    };
+    c.reserve_for(100);
+    EXPECT_EQ(c.capacity(), 100u);
+    for (int k = 0; k < 100; ++k) truth.push_back(make(k)), slot.push_back(c.insert(truth.back()));
+    std::vector<int> drop;
+    for (int k = 0; k < 100; k += 3) drop.push_back(slot[size_t(k)]);
+    c.remove(drop);
+    EXPECT_EQ(c.live_count(), 66u);
+    // 34 free slots: 30 insertions reuse them without growing; 40 more grow by 1.5x once.
+    c.reserve_for(30);
+    EXPECT_EQ(c.capacity(), 100u);
+    for (int k = 100; k < 130; ++k)
+        truth.push_back(make(k)), slot.push_back(c.insert(truth.back()));
+    const int reallocs = c.reallocations();
+    c.reserve_for(40);
+    EXPECT_EQ(c.capacity(), 150u);
+    EXPECT_EQ(c.reallocations(), reallocs + 1);
+    for (int k = 130; k < 170; ++k)
+        truth.push_back(make(k)), slot.push_back(c.insert(truth.back()));
+    EXPECT_EQ(c.live_count(), 136u);
+    for (size_t k = 0; k < truth.size(); ++k) {
+        if (k < 100 && k % 3 == 0) continue;  // removed
+        ASSERT_TRUE(c.live(slot[k]));
+        const CacheEntry e = c.get(slot[k]);
+        EXPECT_EQ(e.position, truth[k].position);
+        EXPECT_EQ(e.created_position, truth[k].created_position);
+        EXPECT_EQ(e.shading, truth[k].shading);
+        EXPECT_EQ(e.created, truth[k].created);
+        EXPECT_EQ(e.B_x, truth[k].B_x);
+        EXPECT_EQ(e.occlusion_field, truth[k].occlusion_field);
+        EXPECT_EQ(e.mirror, truth[k].mirror);
+        EXPECT_EQ(e.reflected_object, truth[k].reflected_object);
+        EXPECT_LT(glm::length(e.view - truth[k].view), 1e-6f);
+    }
+    EXPECT_LE(ObjectCache::bytes_per_slot(), 110u);
+}
+
+TEST(RadianceCacheStorage, EvictionRemovesTheOldestFirst) {
+    RadianceCache cache;
+    cache.reset(2);
+    for (int k = 0; k < 10; ++k) {
+        CacheEntry e;
+        e.created = float(k);
+        cache.object(k % 2).insert(e);
+    }
+    const size_t per = ObjectCache::bytes_per_slot();
+    EXPECT_EQ(cache.evict_oldest(10 * per), 0);
+    EXPECT_EQ(cache.evict_oldest(6 * per), 4);
+    for (int o = 0; o < 2; ++o)
+        for (size_t s = 0; s < cache.object(o).capacity(); ++s)
+            if (cache.object(o).live(int(s))) EXPECT_GE(cache.object(o).get(int(s)).created, 4.0f);
+}
+
+TEST(CachePipeline, StaticSceneSecondFrameShadesNothingAndMatches) {
+    Scene scene = load_scene(std::string(FREQLAB_SOURCE_DIR) + "/scenes/rotor.json");
+    for (SceneObject& o : scene.objects) o.animation.spin_rad_per_s = 0.0f;  // nothing moves
+    RenderConfig config;
+    config.method = RenderMethod::Cache;
+    config.frame.width = 160;
+    config.frame.height = 90;
+    config.points.max_samples = 64;
+    EmbreeDevice device;
+    FrameRenderer renderer(scene, config, device);
+    Progress progress;
+    const FrameResult f0 = renderer.render(0, progress), f1 = renderer.render(1, progress);
+    const long total = f1.stats["pixels_total"];
+    EXPECT_LT(f1.stats["pixels_new"].get<long>(), total / 100);
+    EXPECT_GT(f1.stats["pixels_reused"].get<long>(), 0);
+    const std::vector<float>&a = f0.layers.get("color").data, &b = f1.layers.get("color").data;
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); ++i)
+        ASSERT_NEAR(b[i], a[i], 1e-6 * std::max(1.0f, std::abs(a[i]))) << "value " << i;
+    EXPECT_EQ(f1.stats["discards"]["temporal"].get<long>(), 0);
+}
