@@ -44,8 +44,9 @@ double percentile(std::vector<double> v, double q) {
 }  // namespace
 
 int run_bench(const BenchArgs& a) {
+    if (a.study == "cache" || a.study == "cache-ablation") return run_bench_cache(a);
     if (a.study != "points")
-        throw Error("--study", a.study, "expected points (the only study so far)");
+        throw Error("--study", a.study, "expected points, cache or cache-ablation");
     if (a.runs < 1) throw Error("--runs", std::to_string(a.runs), "expected at least 1");
     if (a.out.empty()) throw Error("--out", "", "expected an output directory");
     const Scene scene = load_scene(a.scene);

@@ -37,8 +37,11 @@ struct BenchArgs {
     int runs = 4;
     std::vector<std::string> sets;
     std::string out = "freqlab-out/bench";
+    std::string frames;    // cache studies: A:B (default: every frame of the scene)
+    int error_every = 10;  // cache studies: RMSE against the reference on every k-th frame
 };
 int run_bench(const BenchArgs& args);
+int run_bench_cache(const BenchArgs& args);  // studies cache, cache-ablation (bench_cache.cpp)
 
 struct FigureArgs {
     std::string input;  // an EXR written by freqlab (or any EXR)

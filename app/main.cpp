@@ -145,7 +145,13 @@ int main(int argc, char** argv) {
     freqlab::BenchArgs ba;
     auto* bench = app.add_subcommand("bench", "rays-vs-error studies of method A against MIS");
     bench->add_option("scene", ba.scene, "scene file");
-    bench->add_option("--study", ba.study, "points: adaptive radiance points vs fixed-N MIS");
+    bench->add_option(
+        "--study", ba.study,
+        "points: adaptive radiance points vs fixed-N MIS; cache: the cache vs "
+        "sparse and equal-time MIS over frames; cache-ablation: temporal test on/off");
+    bench->add_option("--frames", ba.frames, "cache studies: A:B (default: all frames)");
+    bench->add_option("--error-every", ba.error_every,
+                      "cache studies: RMSE against the reference every k-th frame");
     bench->add_option("--frame", ba.frame, "frame");
     bench->add_option("--size", ba.size, "WxH");
     bench->add_option("--runs", ba.runs, "independent adaptive renders per pixel error");

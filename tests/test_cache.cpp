@@ -164,6 +164,7 @@ TEST(CacheDecisions, MergingKeepsTheWeightedRadianceAndOnlyWithinBothRadii) {
     // c sits 0.004 to the side (still on pixel (3, 4)) with B_x = 10: r_x = 0.0089 contains it,
     // but with B_x = 40 (r_x = 0.0022) it does not, and it stays unmerged.
     c.position += vec3(0.004f, 0.0f, 0.0f);
+    c.created_position = c.position;
     c.B_x = 40.0f;
     const int sa = cache.object(0).insert(a);
     cache.object(0).insert(b);

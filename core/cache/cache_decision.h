@@ -8,16 +8,18 @@
 // | frustum   | the point, moved with its object, projects behind the camera or off screen   |
 // | zbuffer   | the pixel it lands on sees another object, nothing, or a depth differing by  |
 // |           | more than cache.depth_tolerance (relative) + the pixel's footprint           |
-// | spatial   | |x_pixel - x_created| > r_x = 2 pi eps_x / B_x, eps = acos(1 - q)            |
+// | spatial   | |x_now - x_created| > r_x = 2 pi eps_x / B_x, eps = acos(1 - q) (world;      |
+// |           | mirrors: the point their pixel reflects now against the one reflected then)  |
 // | angular   | angle(view now, view at creation; object space) > r_theta = 2 pi eps_th / B_th|
 // | temporal  | age > lifespan 2 pi eps_t / B_t (B_t = 0: infinite)                           |
 // | occlusion | |occlusion ratio at the pixel now - at creation| > 0.125 (both upsampled)    |
 //
-// Reading taken where §5.2 is terse: the spatial test compares the surface point seen at the
-// pixel the entry lands on (which the reconstruction will attribute its value to) with the
-// world position the entry was computed at. It so covers both the snap to the pixel centre
-// under camera motion and the motion of a point on a moving object through the (static)
-// world's lighting and shadows.
+// Reading taken where §5.2 is terse: the spatial test compares where the entry is now (moved
+// with its object) with the world position it was computed at, i.e. how far a point of a
+// moving object has travelled through the static world's lighting and shadows. A reused entry
+// keeps its own position as its reconstruction feature, so landing off a pixel centre under
+// camera motion is no error (a first reading, testing that snap against r_x, discarded 93 %
+// of truck.json's entries each frame of its camera orbit at 160 x 90).
 // The occlusion test compares like with like: the upsampled occlusion ratio at the entry's
 // pixel now against the upsampled one at its pixel when it was computed. The literal reading
 // (the entry's own ratio against the pixel's upsampled one) discards every adaptive point on a

@@ -45,7 +45,9 @@ std::vector<CacheRecord> reproject_entries(const RadianceCache& cache, const Cac
                 CacheRecord& rec = records[k];
                 const CacheEntry e = cache.object(rec.object).get(rec.slot);
                 CacheTestValues& v = rec.tests;
-                const vec3 p = transform_point(view.to_world[size_t(rec.object)], e.position);
+                const mat4& T = view.to_world[size_t(rec.object)];
+                const vec3 p = transform_point(T, e.position);
+                rec.world_position = p;
                 const vec3 d = p - cam.origin;
                 const double z = glm::dot(d, cam.forward);
                 v.depth = glm::length(d);
@@ -79,7 +81,7 @@ std::vector<CacheRecord> reproject_entries(const RadianceCache& cache, const Cac
                                                  ? glm::length(refl.position - e.created_position)
                                                  : INFINITY;
                     } else {
-                        v.spatial_distance = glm::length(hit.position - e.created_position);
+                        v.spatial_distance = glm::length(p - e.created_position);
                     }
                     const vec3 view_now =
                         glm::normalize(to_object[size_t(rec.object)] * (cam.origin - p));

@@ -42,6 +42,7 @@ struct CacheRecord {
     int pixel = -1;  // the pixel it lands on (-1 outside the image)
     CacheDecision decision = CacheDecision::Reused;
     CacheTestValues tests;
+    vec3 world_position{0.0f};  // moved with its object to this frame
 };
 
 // Every live entry's geometric tests (all but occlusion), in a deterministic order.

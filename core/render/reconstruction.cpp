@@ -45,7 +45,8 @@ ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSett
                         for (int xx = std::max(0, x - ri); xx <= std::min(w - 1, x + ri); ++xx) {
                             const size_t j = size_t(yy) * w + xx;
                             if (!in.sampled[j]) continue;
-                            const PixelFeature& fj = in.features[j];
+                            const PixelFeature& fj =
+                                in.sample_features.empty() ? in.features[j] : in.sample_features[j];
                             if (fj.object != fi.object) continue;
                             const float dx = float(xx - x), dy = float(yy - y);
                             if (dx * dx + dy * dy > r * r) continue;

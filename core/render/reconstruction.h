@@ -24,6 +24,9 @@ struct ReconstructionInput {
     std::vector<float> radius;         // per pixel, px
     std::vector<char> sampled;         // per pixel
     std::vector<vec3> value;           // per pixel, read where sampled (demodulated)
+    // Where a sample's position differs from its pixel's (cached points reprojected off the
+    // pixel centre): per pixel, read where sampled; empty: the pixel's own features.
+    std::vector<PixelFeature> sample_features;
 };
 
 struct ReconstructionOutput {

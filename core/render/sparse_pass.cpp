@@ -300,6 +300,13 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
     in.radius = radius;
     in.sampled = sampled;
     in.value = value;
+    if (cache) {
+        in.sample_features = in.features;
+        for (int i : reused) {
+            const CacheRecord& r = records[size_t(keeper[size_t(i)])];
+            in.sample_features[size_t(i)].position = r.world_position;
+        }
+    }
     ReconstructionOutput rec = reconstruct(in, sparse);
     std::vector<int> fallback;
     for (size_t i = 0; i < n; ++i)

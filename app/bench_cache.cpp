@@ -1,0 +1,275 @@
+// `freqlab bench SCENE --study cache | cache-ablation`: method A's cache over an animation
+// (issue "Method A, part 3", acceptance 3 and 4).
+//
+// cache: `--method sparse` (the no-cache baseline) and `--method cache` over --frames, in that
+//   order in one process; RMSE against the reference every --error-every frames; the MIS
+//   baseline at equal time (spp from a calibration render at 16 spp, scaled to the cache's mean
+//   frame time) on the same frames. Writes bench_cache.csv (per frame), bench_cache.json
+//   (summary over frames >= 5) and cumulative_time.png.
+// cache-ablation: the cache with and without the temporal test; RMSE over the pixels the moving
+//   shadows sweep: static-object pixels (in every measured reference frame) whose reference
+//   luminance varies by more than 10 % of its maximum over the measured frames.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+
+#include <nlohmann/json.hpp>
+
+#include "base/error.h"
+#include "base/file_io.h"
+#include "commands.h"
+#include "image/line_plot.h"
+#include "image/metrics.h"
+#include "render/frame_renderer.h"
+#include "scene/scene_loader.h"
+
+namespace freqlab {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+struct FrameRecord {
+    int frame = 0;
+    double time_ms = 0.0;
+    json stats;
+    double rmse = NAN, rmse_swept = NAN;
+};
+
+float luminance_at(const Layer& c, size_t i) {
+    return 0.2126f * c.data[3 * i] + 0.7152f * c.data[3 * i + 1] + 0.0722f * c.data[3 * i + 2];
+}
+
+double mean(const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x;
+    return v.empty() ? NAN : s / double(v.size());
+}
+
+double rmse_over(const Layer& a, const Layer& b, const std::vector<char>& mask) {
+    double se = 0;
+    long n = 0;
+    for (size_t i = 0; i < mask.size(); ++i) {
+        if (!mask[i]) continue;
+        for (int c = 0; c < 3; ++c) {
+            const double d = double(a.data[3 * i + size_t(c)]) - b.data[3 * i + size_t(c)];
+            se += d * d;
+        }
+        n += 3;
+    }
+    return n ? std::sqrt(se / double(n)) : NAN;
+}
+
+}  // namespace
+
+int run_bench_cache(const BenchArgs& a) {
+    if (a.out.empty()) throw Error("--out", "", "expected an output directory");
+    if (a.error_every < 1)
+        throw Error("--error-every", std::to_string(a.error_every), "expected >= 1");
+    const Scene scene = load_scene(a.scene);
+    const auto [w, h] = parse_size(a.size, "--size");
+    const auto [first, last] = parse_frame_range(
+        a.frames.empty() ? "0:" + std::to_string(scene.frame_count) : a.frames, scene.frame_count);
+    EmbreeDevice device(0);
+    auto config_for = [&](RenderMethod method, const std::vector<std::string>& extra) {
+        RenderConfig c;
+        c.method = method;
+        SettingsGroup g = c.settings_group();
+        for (const std::string& s : a.sets) g.apply_assignment(s);
+        for (const std::string& s : extra) g.apply_assignment(s);
+        c.frame.width = w;
+        c.frame.height = h;
+        return c;
+    };
+    Progress progress;
+
+    // References (from the reference cache when rendered before), colour and object ids only.
+    std::map<int, LayerSet> reference;
+    {
+        FrameRenderer renderer(scene, config_for(RenderMethod::Reference, {}), device);
+        for (int f = first; f < last; f += a.error_every) {
+            std::fprintf(stderr, "reference frame %d...\n", f);
+            const FrameResult r = renderer.render(f, progress);
+            LayerSet keep(w, h);
+            keep.add("color", LayerKind::Color, 3).data = r.layers.get("color").data;
+            keep.add("object", LayerKind::Categorical, 1).data = r.layers.get("object").data;
+            reference.emplace(f, std::move(keep));
+        }
+    }
+    // The swept region: static objects' pixels whose reference changes over the frames.
+    const size_t n = size_t(w) * h;
+    std::vector<char> swept(n, 0);
+    {
+        std::vector<float> lo(n, INFINITY), hi(n, -INFINITY);
+        std::vector<char> moving(n, 0);
+        for (const auto& [f, ref] : reference) {
+            const Layer& c = ref.get("color");
+            const Layer& o = ref.get("object");
+            for (size_t i = 0; i < n; ++i) {
+                const int obj = int(o.data[i]);
+                if (obj < 0 || obj >= int(scene.objects.size()) ||
+                    !scene.objects[size_t(obj)].animation.is_static())
+                    moving[i] = 1;
+                lo[i] = std::min(lo[i], luminance_at(c, i));
+                hi[i] = std::max(hi[i], luminance_at(c, i));
+            }
+        }
+        for (size_t i = 0; i < n; ++i) swept[i] = !moving[i] && hi[i] - lo[i] > 0.1f * hi[i];
+    }
+    long swept_pixels = 0;
+    for (char s : swept) swept_pixels += s;
+
+    auto run = [&](const std::string& label, RenderMethod method,
+                   const std::vector<std::string>& extra) {
+        std::vector<FrameRecord> out;
+        FrameRenderer renderer(scene, config_for(method, extra), device);
+        for (int f = first; f < last; ++f) {
+            FrameRecord rec;
+            rec.frame = f;
+            const FrameResult r = renderer.render(f, progress);
+            rec.stats = r.stats;
+            rec.time_ms = r.stats["time_ms"].get<double>();
+            if (auto it = reference.find(f); it != reference.end()) {
+                rec.rmse = compare_layers(r.layers, it->second).rmse;
+                rec.rmse_swept = rmse_over(r.layers.get("color"), it->second.get("color"), swept);
+            }
+            std::fprintf(
+                stderr, "%s frame %d: %.0f ms%s\n", label.c_str(), f, rec.time_ms,
+                std::isfinite(rec.rmse) ? (", rmse " + std::to_string(rec.rmse)).c_str() : "");
+            out.push_back(std::move(rec));
+        }
+        return out;
+    };
+    auto summary = [&](const std::vector<FrameRecord>& recs) {
+        std::vector<double> rmse, swept_rmse, new_pct;
+        double total = 0, bytes_per_point = 0;
+        for (const FrameRecord& r : recs) {
+            total += r.time_ms;
+            if (std::isfinite(r.rmse)) rmse.push_back(r.rmse), swept_rmse.push_back(r.rmse_swept);
+            if (r.frame >= first + 5)
+                new_pct.push_back(100.0 * r.stats["pixels_new"].get<double>() /
+                                  r.stats["pixels_total"].get<double>());
+            if (r.stats.contains("cache_bytes_per_point"))
+                bytes_per_point =
+                    std::max(bytes_per_point, r.stats["cache_bytes_per_point"].get<double>());
+        }
+        json j = {{"cumulative_ms", total},
+                  {"mean_frame_ms", total / double(recs.size())},
+                  {"mean_rmse", mean(rmse)},
+                  {"mean_rmse_swept", mean(swept_rmse)},
+                  {"mean_new_pixels_pct_from_frame_5", mean(new_pct)}};
+        if (bytes_per_point > 0) j["max_cache_bytes_per_point"] = bytes_per_point;
+        return j;
+    };
+    std::error_code ec;
+    fs::create_directories(a.out, ec);
+
+    std::vector<std::pair<std::string, std::vector<FrameRecord>>> runs;
+    json report = {{"scene", a.scene},
+                   {"size", a.size},
+                   {"frames", std::to_string(first) + ":" + std::to_string(last)},
+                   {"error_every", a.error_every},
+                   {"swept_pixels", swept_pixels}};
+    if (a.study == "cache-ablation") {
+        runs.push_back({"cache", run("cache", RenderMethod::Cache, {})});
+        runs.push_back({"cache_no_temporal", run("cache, no temporal test", RenderMethod::Cache,
+                                                 {"cache.test_temporal=false"})});
+        for (auto& [label, recs] : runs) report[label] = summary(recs);
+        report["swept_rmse_with_over_without_temporal"] =
+            report["cache"]["mean_rmse_swept"].get<double>() /
+            report["cache_no_temporal"]["mean_rmse_swept"].get<double>();
+    } else {
+        runs.push_back({"sparse", run("sparse", RenderMethod::Sparse, {})});
+        runs.push_back({"cache", run("cache", RenderMethod::Cache, {})});
+        for (auto& [label, recs] : runs) report[label] = summary(recs);
+        const double t_cache = report["cache"]["mean_frame_ms"].get<double>();
+        // MIS at equal time: renders at 8 and 32 spp fit t(spp) = t_0 + c spp on the first
+        // frame (t_0: G-buffer and set-up), solved for the cache's mean frame time.
+        auto mis_time = [&](int spp) {
+            FrameRenderer r(
+                scene, config_for(RenderMethod::Mis, {"mis.spp=" + std::to_string(spp)}), device);
+            r.render(first, progress);  // warm
+            return r.render(first, progress).stats["time_ms"].get<double>();
+        };
+        const double t8 = mis_time(8), t32 = mis_time(32);
+        const double per_spp = std::max((t32 - t8) / 24.0, 1e-6), t_0 = t8 - 8.0 * per_spp;
+        const int spp = std::max(1, int(std::floor((t_cache - t_0) / per_spp)));
+        std::vector<FrameRecord> mis;
+        FrameRenderer mis_renderer(
+            scene, config_for(RenderMethod::Mis, {"mis.spp=" + std::to_string(spp)}), device);
+        for (const auto& [f, ref] : reference) {
+            FrameRecord rec;
+            rec.frame = f;
+            const FrameResult r = mis_renderer.render(f, progress);
+            rec.time_ms = r.stats["time_ms"].get<double>();
+            rec.rmse = compare_layers(r.layers, ref).rmse;
+            rec.rmse_swept = rmse_over(r.layers.get("color"), ref.get("color"), swept);
+            mis.push_back(rec);
+        }
+        std::vector<double> mis_rmse, mis_frame_ms;
+        for (const FrameRecord& r : mis)
+            mis_rmse.push_back(r.rmse), mis_frame_ms.push_back(r.time_ms);
+        report["mis_equal_time"] = {
+            {"spp", spp}, {"mean_frame_ms", mean(mis_frame_ms)}, {"mean_rmse", mean(mis_rmse)}};
+        const json &s = report["sparse"], &c = report["cache"];
+        report["cache_over_sparse"] = {
+            {"mean_rmse", c["mean_rmse"].get<double>() / s["mean_rmse"].get<double>()},
+            {"cumulative_time",
+             c["cumulative_ms"].get<double>() / s["cumulative_ms"].get<double>()}};
+        report["cache_over_mis_equal_time_rmse"] = c["mean_rmse"].get<double>() / mean(mis_rmse);
+    }
+    for (const std::string& s : a.sets) report["sets"].push_back(s);
+
+    // Per-frame CSV and the cumulative-time plot.
+    std::string csv =
+        "run,frame,time_ms,cumulative_ms,rmse,rmse_swept,pixels_new,pixels_reused,pixels_total,"
+        "cache_points,cache_bytes,merged,discard_zbuffer,discard_frustum,discard_spatial,"
+        "discard_angular,discard_temporal,discard_occlusion\n";
+    LinePlot plot;
+    plot.title = "Cumulative render time, " + fs::path(a.scene).filename().string() + " " + a.size;
+    plot.x_label = "frame";
+    plot.y_label = "seconds";
+    const vec3 colours[] = {vec3(0.3f, 0.55f, 1.0f), vec3(1.0f, 0.35f, 0.25f)};
+    for (size_t k = 0; k < runs.size(); ++k) {
+        const auto& [label, recs] = runs[k];
+        PlotSeries series{label, colours[k % 2], {}, {}};
+        double cumulative = 0;
+        for (const FrameRecord& r : recs) {
+            cumulative += r.time_ms;
+            series.x.push_back(r.frame);
+            series.y.push_back(cumulative / 1000.0);
+            auto get = [&](const char* key) {
+                return r.stats.contains(key) ? std::to_string(r.stats[key].get<long>()) : "";
+            };
+            auto discard = [&](const char* key) {
+                return r.stats.contains("discards")
+                           ? std::to_string(r.stats["discards"][key].get<long>())
+                           : "";
+            };
+            char head[160];
+            std::snprintf(head, sizeof head, "%s,%d,%.3f,%.3f,", label.c_str(), r.frame, r.time_ms,
+                          cumulative);
+            csv += head + (std::isfinite(r.rmse) ? std::to_string(r.rmse) : "") + "," +
+                   (std::isfinite(r.rmse_swept) ? std::to_string(r.rmse_swept) : "") + "," +
+                   get("pixels_new") + "," + get("pixels_reused") + "," + get("pixels_total") +
+                   "," + get("cache_points") + "," + get("cache_bytes") + "," + get("merged") +
+                   "," + discard("zbuffer") + "," + discard("frustum") + "," + discard("spatial") +
+                   "," + discard("angular") + "," + discard("temporal") + "," +
+                   discard("occlusion") + "\n";
+        }
+        plot.series.push_back(std::move(series));
+    }
+    const std::string stem = a.study == "cache-ablation" ? "bench_cache_ablation" : "bench_cache";
+    write_text_atomically(fs::path(a.out) / (stem + ".csv"), csv);
+    write_text_atomically(fs::path(a.out) / (stem + ".json"), report.dump(2) + "\n");
+    write_line_plot(fs::path(a.out) / (stem + "_cumulative_time.png"), plot);
+    std::cout << report.dump(2) << std::endl;
+    return 0;
+}
+
+}  // namespace freqlab
