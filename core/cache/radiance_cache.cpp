@@ -53,7 +53,7 @@ size_t ObjectCache::bytes_per_slot() {
 }
 
 size_t ObjectCache::bytes() const {
-    return capacity() * bytes_per_slot() + free_.capacity() * sizeof(int32_t);
+    return capacity() * bytes_per_slot();
 }
 
 void ObjectCache::grow_to(size_t n) {
@@ -70,20 +70,21 @@ void ObjectCache::grow_to(size_t n) {
     reflected_object_.resize(n, -1);
     flags_.resize(n, 0);
     // Lowest slots first out of the free list (it is popped from the back).
-    for (size_t s = n; s-- > old;) free_.push_back(int32_t(s));
     ++reallocations_;
 }
 
 void ObjectCache::reserve_for(size_t count) {
-    if (free_.size() >= count) return;
+    if (capacity() - live_count_ >= count) return;
     const size_t needed = live_count_ + count;
     grow_to(std::max(needed, size_t(std::ceil(1.5 * double(capacity())))));
 }
 
 int ObjectCache::insert(const CacheEntry& e) {
-    if (free_.empty()) reserve_for(1);
-    const int s = free_.back();
-    free_.pop_back();
+    if (live_count_ == capacity()) reserve_for(1);
+    // The free slots are the ones without the live flag: the lowest first, found by a cursor
+    // that restarts after a removal (no free list to store).
+    while (flags_[next_free_] & kLive) ++next_free_;
+    const int s = int(next_free_++);
     const size_t i = size_t(s);
     position_[i] = e.position;
     created_position_[i] = e.created_position;
@@ -145,7 +146,7 @@ void ObjectCache::remove(const std::vector<int>& slots) {
     for (int s : slots) {
         if (!live(s)) continue;
         flags_[size_t(s)] = 0;
-        free_.push_back(s);
+        next_free_ = std::min(next_free_, size_t(s));
         --live_count_;
     }
 }

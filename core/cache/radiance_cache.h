@@ -59,7 +59,7 @@ class ObjectCache {
 
     size_t capacity() const { return flags_.size(); }
     size_t live_count() const { return live_count_; }
-    size_t bytes() const;  // slot storage + free list
+    size_t bytes() const;  // slot storage
     static size_t bytes_per_slot();
     int reallocations() const { return reallocations_; }
 
@@ -77,7 +77,7 @@ class ObjectCache {
     std::vector<uint16_t> weight_;  // half
     std::vector<int16_t> reflected_object_;
     std::vector<uint8_t> flags_;  // live, moving, occluded, mirror
-    std::vector<int32_t> free_;
+    size_t next_free_ = 0;  // no free slot below it
     size_t live_count_ = 0;
     int reallocations_ = 0;
 };
