@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
     gui->add_option("--size", gui_size, "window size WxH");
     std::string gui_method = "gbuffer";
     std::vector<std::string> gui_sets;
-    gui->add_option("--method", gui_method, "gbuffer|mis|reference");
+    gui->add_option("--method", gui_method, "gbuffer|mis|reference|points|sparse|cache");
     gui->add_option("--set", gui_sets, "key=value setting (repeatable)");
     std::string gui_inspect, gui_warm, gui_session;
     bool gui_compare = false, gui_tables = false;

@@ -24,3 +24,7 @@ shot sparse_density.png scenes/rotor.json --method sparse --frame 0 --overlay de
 shot sparse_sampled.png scenes/rotor.json --method sparse --frame 0 --overlay sampled
 shot sparse_inspector.png scenes/rotor.json --method sparse --frame 0 --overlay sampled --inspect 300,280 \
      --size 1280x1000
+shot cache_decisions.png scenes/rotor.json --method cache --warm-from 0 --frame 6 --overlay cache_decisions \
+     --set frame.width=480 --set frame.height=270 --inspect 230,200 --size 1280x1000
+shot cache_decision_layer.png scenes/truck.json --method cache --warm-from 0 --frame 8 --overlay decision \
+     --set frame.width=480 --set frame.height=270

@@ -40,7 +40,10 @@ void restart_renderer(Workbench::State& s) {
     s.shown = nullptr;
     s.shown_frame = -1;
     s.error.clear();
-    if (s.device) s.renderer = std::make_unique<FrameRenderer>(s.scene, s.config, *s.device);
+    if (s.device) {
+        s.renderer = std::make_unique<FrameRenderer>(s.scene, s.config, *s.device);
+        s.renderer->keep_cache_details(true);  // the inspector lists cache entries' tuples
+    }
     // References depend on the settings too: drop them with the frames.
     s.reference_job.reset();
     s.reference_renderer.reset();
@@ -110,7 +113,7 @@ void start_env_bandwidth_job(Workbench::State& s) {
 void draw_settings_panel(Workbench::State& s) {
     ImGui::Text("scene: %s", s.scene.name.c_str());
     int method = int(s.config.method);
-    const char* methods = "gbuffer\0mis\0reference\0points\0sparse\0";
+    const char* methods = "gbuffer\0mis\0reference\0points\0sparse\0cache\0";
     if (ImGui::Combo("method", &method, methods) && method != int(s.config.method)) {
         s.config.method = RenderMethod(method);
         restart_renderer(s);
@@ -127,11 +130,12 @@ void draw_settings_panel(Workbench::State& s) {
             "reference: the same at reference.spp (cached on disk)");
     SettingsGroup group = s.config.settings_group();
     const uint32_t changed = draw_settings(group, !s.options.show_tables);
-    if (changed & (kInvalidatesGBuffer | kInvalidatesShading))
+    if (changed & (kInvalidatesGBuffer | kInvalidatesShading | kInvalidatesCache))
         restart_renderer(s);
     else if (changed & kInvalidatesDisplay)
         s.view_dirty = true;
 
+    if (s.config.method == RenderMethod::Cache) draw_cache_panel(s);
     draw_compare_panel(s);
     draw_tables_panel(*s.tables);
     if (ImGui::CollapsingHeader("Help")) {

@@ -87,6 +87,9 @@ void render_reference_view(Workbench::State& s, const DisplayParams& params);
 void draw_compare_panel(Workbench::State& s);
 // The viewport (workbench_viewport.cpp).
 void draw_viewport(Workbench::State& s);
+// Method A's cache: reused / new / discards per reason over the rendered frames
+// (workbench_cache_panel.cpp).
+void draw_cache_panel(Workbench::State& s);
 // The inspector panel (workbench_inspector.cpp).
 void draw_inspector(Workbench& wb, Workbench::State& s);
 void draw_export_menu(Workbench::State& s);

@@ -49,8 +49,9 @@ constexpr int kCacheDecisionCount = 8;
 
 const char* to_string(CacheDecision d);  // "reused", "merged", "discard_zbuffer", ...
 bool is_discard(CacheDecision d);
-// The seed's Fig. 12(a) palette: reused black, spatial blue, angular red, temporal orange,
-// occlusion purple; z-buffer grey, frustum teal, merged green.
+// The seed's Fig. 12(a) palette: spatial blue, angular red, temporal orange, occlusion purple;
+// reused white (the seed's black on white, turned for a dark viewer); z-buffer grey, frustum
+// teal, merged green.
 vec3 decision_colour(CacheDecision d);
 
 double validity_epsilon(double q);                   // acos(1 - q)

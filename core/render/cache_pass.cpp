@@ -89,7 +89,7 @@ void add_cache_layers(LayerSet& layers, const std::vector<PixelDecision>& decisi
     Layer& d = layers.add("decision", LayerKind::Categorical, 1,
                           "where each pixel's radiance point came from");
     d.legend = {"none", "reused", "new initial", "new adaptive", "new fallback"};
-    d.palette = {vec3(0.0f), vec3(0.1f), vec3(0.2f, 0.45f, 1.0f), vec3(0.95f, 0.25f, 0.15f),
+    d.palette = {vec3(0.0f), vec3(0.55f), vec3(0.2f, 0.45f, 1.0f), vec3(0.95f, 0.25f, 0.15f),
                  vec3(1.0f, 0.85f, 0.1f)};
     Layer& a = layers.add("age", LayerKind::Continuous, 1,
                           "age (s) of the reused cache entry (0 where new)");
@@ -97,7 +97,7 @@ void add_cache_layers(LayerSet& layers, const std::vector<PixelDecision>& decisi
                           "the previous frame's entries where they land, by decision");
     c.sparse = true;
     c.legend.push_back("none");
-    c.palette.push_back(vec3(0.0f));
+    c.palette.push_back(vec3(0.12f));
     for (int k = 0; k < kCacheDecisionCount; ++k) {
         c.legend.push_back(to_string(CacheDecision(k)));
         c.palette.push_back(decision_colour(CacheDecision(k)));

@@ -22,6 +22,11 @@ std::vector<std::string> FrameRenderer::trace_pixel(const FrameResult& r, int x,
         std::snprintf(buf, sizeof buf, format, args...);
         out.push_back(buf);
     };
+    if (x < 0 || y < 0 || x >= r.layers.width() || y >= r.layers.height()) {
+        line("pixel (%d, %d) is outside the %d x %d image", x, y, r.layers.width(),
+             r.layers.height());
+        return out;
+    }
     const RenderConfig& config = config_;
     ray_scene_.update(r.time_s);  // the pixel's frame, whatever was rendered last
     const RayScene& rs = ray_scene_;
@@ -76,8 +81,12 @@ std::vector<std::string> FrameRenderer::trace_pixel(const FrameResult& r, int x,
         const Layer& sig = r.layers.get("sigma_v");
         const size_t i = size_t(y) * w + x;
         const float radius = r.layers.get("recon_radius").data[i];
+        auto origin = [&](size_t j) {
+            const size_t k = size_t(kind.data[j]);
+            return k < kind.legend.size() ? kind.legend[k].c_str() : "?";
+        };
         line("reconstruction: radius %.2f px, sum of weights %.4g, sampled here: %s", radius,
-             r.layers.get("recon_weight").data[i], kind.legend[size_t(kind.data[i])].c_str());
+             r.layers.get("recon_weight").data[i], origin(i));
         if (sp.material->type == BrdfType::Mirror) {
             line("perfect mirror: its own radiance point, never filtered");
             return out;
@@ -111,9 +120,8 @@ std::vector<std::string> FrameRenderer::trace_pixel(const FrameResult& r, int x,
         for (size_t k = 0; k < used.size() && k < max_samples; ++k) {
             const size_t j = size_t(used[k].y) * w + used[k].x;
             line("(%4d,%4d) %-9s %10.4g %7.2f%%  (%.5g, %.5g, %.5g)", used[k].x, used[k].y,
-                 kind.legend[size_t(kind.data[j])].c_str(), used[k].weight,
-                 total > 0 ? 100.0 * used[k].weight / total : 0.0, samples.data[3 * j],
-                 samples.data[3 * j + 1], samples.data[3 * j + 2]);
+                 origin(j), used[k].weight, total > 0 ? 100.0 * used[k].weight / total : 0.0,
+                 samples.data[3 * j], samples.data[3 * j + 1], samples.data[3 * j + 2]);
         }
         return out;
     }
