@@ -114,6 +114,8 @@ void RayScene::place(int i, float time) {
 
 void RayScene::update(float time) {
     if (committed_ && time == time_) return;
+    const EnvironmentMap* env = scene_.environment();
+    environment_now_ = env && env->spin_deg_per_s() != 0.0f ? env->at_time(time) : nullptr;
     bool moved = !committed_;
     for (size_t i = 0; i < instances_.size(); ++i) {
         if (committed_ && scene_.objects[i].animation.is_static()) continue;
@@ -129,6 +131,11 @@ void RayScene::update(float time) {
     rtcGetSceneBounds(top_, &b);
     bounds_min_ = vec3(b.lower_x, b.lower_y, b.lower_z);
     bounds_max_ = vec3(b.upper_x, b.upper_y, b.upper_z);
+}
+
+vec3 RayScene::background(const vec3& direction) const {
+    const EnvironmentMap* env = environment();
+    return env ? env->eval_smooth(direction) : vec3(0.0f);
 }
 
 SurfaceHit RayScene::make_hit(const Ray& ray, float t, unsigned inst, unsigned prim, vec3 ng_object,

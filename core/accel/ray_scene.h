@@ -67,6 +67,12 @@ class RayScene {
     void occluded_stream(const Ray* rays, int count, bool* occluded) const;
 
     const mat4& object_to_world(int object) const { return to_world_[object]; }
+    // The scene's environment as it stands at time() (turned when it spins); null without one.
+    const EnvironmentMap* environment() const {
+        return environment_now_ ? environment_now_.get() : scene_.environment();
+    }
+    // Radiance seen along `direction` when nothing is hit (the environment at time()).
+    vec3 background(const vec3& direction) const;
     vec3 bounds_min() const { return bounds_min_; }
     vec3 bounds_max() const { return bounds_max_; }
     const Scene& scene() const { return scene_; }
@@ -86,6 +92,7 @@ class RayScene {
     float time_ = -1.0f;
     bool committed_ = false;
     vec3 bounds_min_{0.0f}, bounds_max_{0.0f};
+    std::shared_ptr<const EnvironmentMap> environment_now_;  // set when the environment spins
 };
 
 }  // namespace freqlab

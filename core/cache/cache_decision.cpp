@@ -75,7 +75,10 @@ CacheDecision decide_geometric(const CacheTestValues& v, int entry_object, const
     return CacheDecision::Reused;
 }
 
-CacheDecision decide_occlusion(const CacheTestValues& v, const CacheSettings& s) {
+CacheDecision decide_observed(const CacheTestValues& v, const CacheSettings& s) {
+    if (s.test_temporal && v.shading_tested &&
+        std::abs(v.shading_now - v.shading_then) > std::log1p(double(s.shading_change)))
+        return CacheDecision::DiscardTemporal;
     if (s.test_occlusion && v.occlusion_tested &&
         std::abs(v.occlusion_entry - v.occlusion_pixel) > s.occlusion_threshold)
         return CacheDecision::DiscardOcclusion;
@@ -112,11 +115,16 @@ std::vector<std::string> explain(const CacheTestValues& v, int entry_object,
                   (std::isinf(v.r_theta) ? std::string(" an unbounded cone (B_theta = 0)")
                                          : format(" a %.3g deg cone", degrees(v.r_theta))) +
                   (s.test_angular ? "" : off));
-    out.push_back(format("temporal: age %.4g s, ", v.age) +
-                  (std::isinf(v.lifespan) ? std::string("infinite lifespan (B_t = 0)")
-                                          : format("lifespan %.4g s", v.lifespan) +
-                                                (v.age > v.lifespan ? ", expired" : "")) +
-                  (s.test_temporal ? "" : off));
+    out.push_back(
+        format("temporal: age %.4g s, ", v.age) +
+        (std::isinf(v.lifespan)
+             ? std::string("infinite lifespan (B_t = 0)")
+             : format("lifespan %.4g s", v.lifespan) + (v.age > v.lifespan ? ", expired" : "")) +
+        (v.shading_tested ? format("; shading around it changed by %.1f %% (limit %.1f %%)",
+                                   100.0 * std::expm1(std::abs(v.shading_now - v.shading_then)),
+                                   100.0 * s.shading_change)
+                          : std::string()) +
+        (s.test_temporal ? "" : off));
     if (v.occlusion_tested)
         out.push_back(format("occlusion: ratio at the pixel %.3f when computed, %.3f now",
                              v.occlusion_entry, v.occlusion_pixel) +

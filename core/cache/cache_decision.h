@@ -11,7 +11,9 @@
 // | spatial   | |x_now - x_created| > r_x = 2 pi eps_x / B_x, eps = acos(1 - q) (world;      |
 // |           | mirrors: the point their pixel reflects now against the one reflected then)  |
 // | angular   | angle(view now, view at creation; object space) > r_theta = 2 pi eps_th / B_th|
-// | temporal  | age > lifespan 2 pi eps_t / B_t (B_t = 0: infinite)                           |
+// | temporal  | age > lifespan 2 pi eps_t / B_t (B_t = 0: infinite), or the observed change: |
+// |           | the initial points' upsampled shading at its pixel changed by more than      |
+// |           | cache.shading_change (relative) since it was computed                        |
 // | occlusion | |occlusion ratio at the pixel now - at creation| > 0.125 (both upsampled)    |
 //
 // Reading taken where §5.2 is terse: the spatial test compares where the entry is now (moved
@@ -20,6 +22,12 @@
 // keeps its own position as its reconstruction feature, so landing off a pixel centre under
 // camera motion is no error (a first reading, testing that snap against r_x, discarded 93 %
 // of truck.json's entries each frame of its camera orbit at 160 x 90).
+// B_t only sees occluders that occlude the pilot already: a point lit when computed never
+// expires when a moving shadow reaches it, and the occlusion ratio (BRDF-weighted) hardly moves
+// when a thin occluder crosses the bright part of the sky. The initial points are shaded anew
+// every frame of a moving scene (Algorithm 1); the change of their upsampled shading at the
+// entry's pixel is the evidence the temporal test adds. Measured on rotor.json at 640 x 360,
+// 60 frames, without it: RMSE in the swept region grew from 0.027 (frame 0) to 0.090 (frame 50).
 // The occlusion test compares like with like: the upsampled occlusion ratio at the entry's
 // pixel now against the upsampled one at its pixel when it was computed. The literal reading
 // (the entry's own ratio against the pixel's upsampled one) discards every adaptive point on a
@@ -70,13 +78,16 @@ struct CacheTestValues {
     double age = 0.0, lifespan = 0.0;                     // s
     double occlusion_entry = 0.0, occlusion_pixel = 0.0;  // upsampled: at creation, now
     bool occlusion_tested = false;
+    double shading_then = 0.0, shading_now = 0.0;  // upsampled log luminance: at creation, now
+    bool shading_tested = false;
 };
 
 // Every test but the occlusion one (it needs this frame's statistics at the pixel).
 CacheDecision decide_geometric(const CacheTestValues& v, int entry_object,
                                const CacheSettings& settings);
-// The occlusion test on an entry the other tests kept.
-CacheDecision decide_occlusion(const CacheTestValues& v, const CacheSettings& settings);
+// The tests against this frame's upsampled statistics, on an entry the others kept: the
+// observed half of the temporal test, then the occlusion test.
+CacheDecision decide_observed(const CacheTestValues& v, const CacheSettings& settings);
 
 // One sentence per test ("angular: view moved 2.3° outside a 1.1° cone").
 std::vector<std::string> explain(const CacheTestValues& v, int entry_object,

@@ -11,6 +11,16 @@ namespace {
 
 enum Flags : uint8_t { kLive = 1, kMoving = 2, kOccluded = 4, kMirror = 8 };
 
+// Half floats for what only sets radii and thresholds; clamped to the largest half.
+uint16_t to_half(float v) {
+    return Imath::half(std::isnan(v) ? v : std::clamp(v, -65504.0f, 65504.0f)).bits();
+}
+float from_half(uint16_t bits) {
+    Imath::half h;
+    h.setBits(bits);
+    return float(h);
+}
+
 }  // namespace
 
 vec2 octahedral_encode(const vec3& n) {
@@ -48,8 +58,8 @@ vec3 octahedral_decode_half(uint32_t packed) {
 }
 
 size_t ObjectCache::bytes_per_slot() {
-    return 4 * sizeof(vec3) + sizeof(vec2) + 2 * sizeof(uint32_t) + 8 * sizeof(float) +
-           sizeof(uint16_t) + sizeof(int16_t) + sizeof(uint8_t);
+    return 4 * sizeof(vec3) + sizeof(vec2) + 2 * sizeof(uint32_t) + 4 * sizeof(float) +
+           6 * sizeof(uint16_t) + sizeof(int16_t) + sizeof(uint8_t);
 }
 
 size_t ObjectCache::bytes() const {
@@ -63,10 +73,9 @@ void ObjectCache::grow_to(size_t n) {
     view_.resize(n);
     normal_.resize(n);
     reflected_normal_.resize(n);
-    for (auto* v :
-         {&created_, &B_x_, &B_theta_, &B_t_, &occlusion_, &occlusion_field_, &sigma_v_, &t_min_})
-        v->resize(n);
+    for (auto* v : {&created_, &occlusion_, &sigma_v_, &t_min_}) v->resize(n);
     weight_.resize(n);
+    for (auto* v : {&B_x_, &B_theta_, &B_t_, &occlusion_field_, &shading_field_}) v->resize(n);
     reflected_object_.resize(n, -1);
     flags_.resize(n, 0);
     // Lowest slots first out of the free list (it is popped from the back).
@@ -91,13 +100,14 @@ int ObjectCache::insert(const CacheEntry& e) {
     view_[i] = octahedral_encode(e.view);
     normal_[i] = octahedral_encode_half(e.normal);
     shading_[i] = e.shading;
-    weight_[i] = Imath::half(std::min(e.weight, 6e4f)).bits();
+    weight_[i] = to_half(e.weight);
     created_[i] = e.created;
-    B_x_[i] = e.B_x;
-    B_theta_[i] = e.B_theta;
-    B_t_[i] = e.B_t;
+    B_x_[i] = to_half(e.B_x);
+    B_theta_[i] = to_half(e.B_theta);
+    B_t_[i] = to_half(e.B_t);
     occlusion_[i] = e.occlusion_ratio;
-    occlusion_field_[i] = e.occlusion_field;
+    occlusion_field_[i] = to_half(e.occlusion_field);
+    shading_field_[i] = to_half(e.shading_field);
     sigma_v_[i] = e.sigma_v;
     t_min_[i] = e.t_min;
     flags_[i] = uint8_t(kLive | (e.moving ? kMoving : 0) | (e.occluded ? kOccluded : 0) |
@@ -117,15 +127,14 @@ CacheEntry ObjectCache::get(int slot) const {
     e.view = octahedral_decode(view_[i]);
     e.normal = octahedral_decode_half(normal_[i]);
     e.shading = shading_[i];
-    Imath::half weight;
-    weight.setBits(weight_[i]);
-    e.weight = float(weight);
+    e.weight = from_half(weight_[i]);
     e.created = created_[i];
-    e.B_x = B_x_[i];
-    e.B_theta = B_theta_[i];
-    e.B_t = B_t_[i];
+    e.B_x = from_half(B_x_[i]);
+    e.B_theta = from_half(B_theta_[i]);
+    e.B_t = from_half(B_t_[i]);
     e.occlusion_ratio = occlusion_[i];
-    e.occlusion_field = occlusion_field_[i];
+    e.occlusion_field = from_half(occlusion_field_[i]);
+    e.shading_field = from_half(shading_field_[i]);
     e.sigma_v = sigma_v_[i];
     e.t_min = t_min_[i];
     e.moving = flags_[i] & kMoving;
@@ -139,7 +148,7 @@ CacheEntry ObjectCache::get(int slot) const {
 
 void ObjectCache::set_value(int slot, const vec3& shading, float weight) {
     shading_[size_t(slot)] = shading;
-    weight_[size_t(slot)] = Imath::half(std::min(weight, 6e4f)).bits();
+    weight_[size_t(slot)] = to_half(weight);
 }
 
 void ObjectCache::remove(const std::vector<int>& slots) {

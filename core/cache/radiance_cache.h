@@ -11,12 +11,14 @@
 // | shading            | demodulated radiance (texture divided out); mirrors: the radiance  |
 // | weight             | samples behind the value (merge weights; half float)              |
 // | created            | time (s) of the frame that computed it                            |
-// | B_x, B_theta, B_t  | the point's bandwidths (validity radii, lifespan)                 |
+// | B_x, B_theta, B_t  | the point's bandwidths (validity radii, lifespan); half floats    |
 // | occlusion_ratio, sigma_v, t_min, occluded | the visibility statistics it stands for    |
 // | occlusion_field    | the upsampled occlusion ratio at its pixel when it was computed   |
+// | shading_field      | the upsampled log shading luminance there then (observed change)  |
 // | reflected_*        | mirrors: the object, object-space position and normal it reflects  |
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -39,6 +41,8 @@ struct CacheEntry {
     // The occlusion ratio this frame's upsampled statistics gave at its pixel when it was
     // computed: the occlusion test compares like with like (see cache_decision.h).
     float occlusion_field = 0.0f;
+    // Likewise the upsampled log luminance of the initial points' shading (NaN: none reached).
+    float shading_field = NAN;
     bool moving = false, occluded = false, mirror = false;
     int reflected_object = -1;
     vec3 reflected_position{0.0f};
@@ -72,12 +76,13 @@ class ObjectCache {
     std::vector<vec3> position_, created_position_, shading_, reflected_position_;
     std::vector<vec2> view_;                           // octahedral
     std::vector<uint32_t> normal_, reflected_normal_;  // octahedral, two halves
-    std::vector<float> created_, B_x_, B_theta_, B_t_, occlusion_, occlusion_field_, sigma_v_,
-        t_min_;
+    std::vector<float> created_, occlusion_, sigma_v_, t_min_;
+    // Half floats: the bandwidths (radii, lifespan) and the observed-change references.
+    std::vector<uint16_t> B_x_, B_theta_, B_t_, occlusion_field_, shading_field_;
     std::vector<uint16_t> weight_;  // half
     std::vector<int16_t> reflected_object_;
     std::vector<uint8_t> flags_;  // live, moving, occluded, mirror
-    size_t next_free_ = 0;  // no free slot below it
+    size_t next_free_ = 0;        // no free slot below it
     size_t live_count_ = 0;
     int reallocations_ = 0;
 };

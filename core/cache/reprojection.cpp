@@ -68,6 +68,7 @@ std::vector<CacheRecord> reproject_entries(const RadianceCache& cache, const Cac
                 v.lifespan = validity_radius(settings.q_eps_t, e.B_t);
                 v.age = double(view.time) - double(e.created);
                 v.occlusion_entry = e.occlusion_field;
+                v.shading_then = e.shading_field;
                 if (v.in_frustum) {
                     const SurfaceHit& hit = (*view.hits)[size_t(rec.pixel)];
                     v.surface_object = hit.valid ? hit.object : -1;
@@ -93,13 +94,17 @@ std::vector<CacheRecord> reproject_entries(const RadianceCache& cache, const Cac
     return records;
 }
 
-void apply_occlusion_test(std::vector<CacheRecord>& records, const std::vector<float>& occlusion,
-                          const std::vector<char>& known, const CacheSettings& settings) {
+void apply_field_tests(std::vector<CacheRecord>& records, const std::vector<float>& occlusion,
+                       const std::vector<float>& shading, const std::vector<char>& known,
+                       const CacheSettings& settings) {
     for (CacheRecord& rec : records) {
         if (rec.decision != CacheDecision::Reused || !known[size_t(rec.pixel)]) continue;
-        rec.tests.occlusion_tested = true;
-        rec.tests.occlusion_pixel = occlusion[size_t(rec.pixel)];
-        rec.decision = decide_occlusion(rec.tests, settings);
+        CacheTestValues& v = rec.tests;
+        v.occlusion_tested = true;
+        v.occlusion_pixel = occlusion[size_t(rec.pixel)];
+        v.shading_now = shading[size_t(rec.pixel)];
+        v.shading_tested = std::isfinite(v.shading_now) && std::isfinite(v.shading_then);
+        rec.decision = decide_observed(v, settings);
     }
 }
 

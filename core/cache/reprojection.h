@@ -49,10 +49,11 @@ struct CacheRecord {
 std::vector<CacheRecord> reproject_entries(const RadianceCache& cache, const CacheFrameView& view,
                                            const CacheSettings& settings);
 
-// The occlusion test of the entries still kept, against this frame's per-pixel occlusion
-// ratio (`known[pixel]` false: no statistic there, the test passes).
-void apply_occlusion_test(std::vector<CacheRecord>& records, const std::vector<float>& occlusion,
-                          const std::vector<char>& known, const CacheSettings& settings);
+// The tests of the entries still kept against this frame's upsampled per-pixel occlusion ratio
+// and log shading (`known[pixel]` false, or a NaN shading: no statistic there, they pass).
+void apply_field_tests(std::vector<CacheRecord>& records, const std::vector<float>& occlusion,
+                       const std::vector<float>& shading, const std::vector<char>& known,
+                       const CacheSettings& settings);
 
 // Per pixel, the record whose value the pixel uses (-1: none). Applies the merge rule to
 // several survivors on one pixel (updates the keeper's value in the cache).

@@ -52,7 +52,7 @@ std::vector<float> splat_coverage(int w, int h, const std::vector<int>& reused,
 
 CacheEntry make_cache_entry(const SurfaceHit& hit, const vec3& view_dir, const mat4& to_world,
                             const RadiancePoint& point, const vec3& shading, float occlusion_field,
-                            bool mirror, const SurfaceHit& reflected,
+                            float shading_field, bool mirror, const SurfaceHit& reflected,
                             const mat4* reflected_to_world, bool moving, float time) {
     CacheEntry e;
     const mat3 linear(to_world);
@@ -68,6 +68,7 @@ CacheEntry make_cache_entry(const SurfaceHit& hit, const vec3& view_dir, const m
     e.B_t = float(point.B_t);
     e.occlusion_ratio = float(point.occlusion_ratio);
     e.occlusion_field = occlusion_field;
+    e.shading_field = shading_field;
     e.sigma_v = float(point.sigma_V);
     e.t_min = float(point.t_min);
     e.occluded = point.pilot_occluded > 0;

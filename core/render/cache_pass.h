@@ -49,7 +49,7 @@ std::vector<float> splat_coverage(int width, int height, const std::vector<int>&
 // radiance); `reflected` the first non-mirror hit of a mirror pixel's reflection.
 CacheEntry make_cache_entry(const SurfaceHit& hit, const vec3& view_dir, const mat4& to_world,
                             const RadiancePoint& point, const vec3& shading, float occlusion_field,
-                            bool mirror, const SurfaceHit& reflected,
+                            float shading_field, bool mirror, const SurfaceHit& reflected,
                             const mat4* reflected_to_world, bool moving, float time);
 
 // `decision` (per pixel), `age` and `cache_decisions` (the previous frame's entries where they

@@ -42,7 +42,7 @@ float variance_of_mean(const std::vector<vec3>& units, int n) {
 }  // namespace
 
 DirectLighting::DirectLighting(const RayScene& scene, const ShadingSettings& settings)
-    : scene_(scene), environment_(scene.scene().environment()), settings_(settings) {
+    : scene_(scene), environment_(scene.environment()), settings_(settings) {
     for (const Light& l : scene.scene().lights)
         if (!l.environment) lights_.push_back(&l);
 }

@@ -51,7 +51,7 @@ GBufferOutput render_gbuffer(const RayScene& rs, int frame, const FrameSettings&
     auto shade_preview = [&](const SurfaceHit& hit, const vec3& dir, vec3* alb) {
         if (!hit.valid) {
             *alb = vec3(0.0f);
-            return scene.background(dir);
+            return rs.background(dir);
         }
         const Material& m = scene.materials[size_t(hit.material)];
         *alb = m.albedo.eval(hit.uv);

@@ -80,7 +80,7 @@ PointsPassOutput render_points(const RayScene& scene, const GBuffer& gb, int fra
                 rp = integrator.integrate_hit(hit, -gb.view_dirs[p],
                                               point_context(gb, x, y, scene.time()), rng);
             } else {
-                rp.radiance = scene.scene().background(gb.view_dirs[p]);
+                rp.radiance = scene.background(gb.view_dirs[p]);
             }
             std::array<double, 10> vals = radiance_point_fields(rp);
             bool bad = !std::isfinite(rp.radiance.x + rp.radiance.y + rp.radiance.z) ||

@@ -74,6 +74,11 @@ RadiancePointIntegrator::RadiancePointIntegrator(const RayScene& scene,
     const double radius = 0.5 * glm::length(glm::dvec3(scene.bounds_max() - scene.bounds_min()));
     large_distance_ = settings.large_distance * std::max(radius, 1e-3);
     mirror_depth_ = shading.mirror_depth;
+    const EnvironmentMap *base = scene.scene().environment(), *now = scene.environment();
+    if (base && now) {
+        environment_spin_ = glm::radians(double(base->spin_deg_per_s()));
+        environment_turned_ = glm::radians(double(now->rotation_deg()) - base->rotation_deg());
+    }
 }
 
 RadiancePoint RadiancePointIntegrator::integrate_hit(const SurfaceHit& first, const vec3& first_wo,
@@ -84,7 +89,7 @@ RadiancePoint RadiancePointIntegrator::integrate_hit(const SurfaceHit& first, co
         RadiancePoint rp;
         rp.rays = path.rays;
         if (path.escaped) {
-            const EnvironmentMap* env = scene_.scene().environment();
+            const EnvironmentMap* env = scene_.environment();
             rp.radiance = path.throughput * (env ? env->eval_smooth(-path.wo) : vec3(0.0f));
         }
         return rp;
@@ -138,7 +143,7 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
     const double radius = footprint.query_radius();
     rp.footprint_radius = radius;
     rp.sigma_rho = footprint.whole_hemisphere ? kLambertSigma : std::atan(footprint.sigma);
-    rp.B_L = bandwidth_ ? bandwidth_->query(vec3(mu), radius) : 0.0;
+    rp.B_L = bandwidth_ ? bandwidth_->query(to_map_frame(vec3(mu)), radius) : 0.0;
     const double b_cone = rp.B_L * 2.0 * radius;
     const int n_max = std::max(settings_.max_samples, 2);
     int n_l = int(std::ceil(4.0 * b_cone * b_cone));
@@ -266,6 +271,14 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
         rp.t_min = large_distance_;
         say(chain, "no occluded pilot sample: f_V = 0, t_min = large distance %.4g", rp.t_min);
     }
+    if (environment_spin_ != 0.0) {
+        // Egan et al.'s lighting term: the environment turning at omega moves the lighting in
+        // the footprint at most that fast; B_t is the larger of the two terms (seed §5.2).
+        const double lighting = std::abs(environment_spin_) * rp.B_L;
+        rp.B_t = std::max(rp.B_t, lighting);
+        say(chain, "environment spins at %.4g rad/s: |omega| B_L = %.5g -> B_t = %.5g (1/s)",
+            environment_spin_, lighting, rp.B_t);
+    }
     const int n_omega = std::min(n_max, n_l + int(std::lround(f_v)));
     rp.N_omega = n_omega;
     say(chain, "N_Omega = min(N_max, N_L + f_V) = %d", n_omega);
@@ -302,7 +315,15 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
 double RadiancePointIntegrator::environment_bandwidth(const ShadingPoint& sp) const {
     const BrdfFootprint footprint = brdf_footprint(*sp.material);
     const glm::dvec3 mu = footprint_axis(sp, footprint);
-    return bandwidth_ ? bandwidth_->query(vec3(mu), footprint.query_radius()) : 0.0;
+    return bandwidth_ ? bandwidth_->query(to_map_frame(vec3(mu)), footprint.query_radius()) : 0.0;
+}
+
+vec3 RadiancePointIntegrator::to_map_frame(const vec3& d) const {
+    // The hierarchy was built on the map at its base rotation: turn the direction back by
+    // what the environment has spun since.
+    if (environment_turned_ == 0.0) return d;
+    const float c = float(std::cos(environment_turned_)), s = float(std::sin(environment_turned_));
+    return vec3(c * d.x + s * d.y, -s * d.x + c * d.y, d.z);
 }
 
 PointBandwidths RadiancePointIntegrator::bandwidths(const ShadingPoint& sp, const PointContext& ctx,

@@ -117,6 +117,9 @@ class RadiancePointIntegrator {
     const EnvBandwidthHierarchy* bandwidth_;
     double large_distance_;
     int mirror_depth_;
+    double environment_spin_ = 0.0;    // rad/s
+    double environment_turned_ = 0.0;  // rad, at the scene's time
+    vec3 to_map_frame(const vec3& direction) const;
 };
 
 }  // namespace freqlab

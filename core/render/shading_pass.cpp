@@ -33,7 +33,7 @@ ShadingPassOutput shade_pixels(const RayScene& scene, const GBuffer& gb, int fra
                 if (hit.valid)
                     e = lighting.shade_hit(hit, -dir, spp, rng);
                 else
-                    e.radiance = scene.scene().background(dir);
+                    e.radiance = scene.background(dir);
                 if (!std::isfinite(e.radiance.x + e.radiance.y + e.radiance.z) ||
                     !std::isfinite(e.variance)) {
                     ++task_bad;

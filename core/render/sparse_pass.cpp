@@ -21,6 +21,10 @@ double ms_since(Clock::time_point t0) {
 }
 
 // Per-channel demodulation by the texture value (textures multiply after reconstruction).
+float log_luminance(const vec3& shading) {
+    return std::log(luminance(shading) + 1e-4f);
+}
+
 vec3 demodulate(const vec3& radiance, const vec3& texture) {
     vec3 out(0.0f);
     for (int c = 0; c < 3; ++c) out[c] = texture[c] > 1e-6f ? radiance[c] / texture[c] : 0.0f;
@@ -179,13 +183,13 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
             const RadiancePoint& rp = point[size_t(i)];
             values.push_back({rp.pilot_occluded > 0 ? 1.0f : 0.0f,
                               float(std::log(std::max(rp.t_min, 1e-6))), float(rp.occlusion_ratio),
-                              float(rp.sigma_V)});
+                              float(rp.sigma_V), log_luminance(value[size_t(i)])});
         } else {
             const CacheRecord& r = records[size_t(standin[size_t(i)])];
             const CacheEntry e = cache->state.cache.object(r.object).get(r.slot);
             values.push_back({e.occluded ? 1.0f : 0.0f,
                               float(std::log(std::max(double(e.t_min), 1e-6))), e.occlusion_ratio,
-                              e.sigma_v});
+                              e.sigma_v, log_luminance(e.shading)});
             own[size_t(i)] = 1;
         }
     }
@@ -210,11 +214,16 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
     // 2b. The cache: the occlusion test against this frame's statistics, then one entry per
     // pixel (merging the others where the rule allows).
     std::vector<int> keeper(n, -1), reused;
-    std::vector<float> age(n, 0.0f), field(n, 0.0f);
+    // The upsampled occlusion ratio and log shading at every pixel: what the observed-change
+    // tests compare between an entry's creation and now.
+    std::vector<float> age(n, 0.0f), field(n, 0.0f), shading_field(n, 0.0f);
     if (cache) {
         t0 = Clock::now();
-        for (size_t i = 0; i < n; ++i) field[i] = found[i] ? stats[i][2] : mu_v[i];
-        apply_occlusion_test(records, field, found, cache->settings);
+        for (size_t i = 0; i < n; ++i) {
+            field[i] = found[i] ? stats[i][2] : mu_v[i];
+            shading_field[i] = found[i] ? stats[i][4] : NAN;
+        }
+        apply_field_tests(records, field, shading_field, found, cache->settings);
         keeper = resolve_pixels(records, cache->state.cache, view, cache->settings);
         for (size_t i = 0; i < n; ++i) {
             if (keeper[i] < 0 || fresh[i]) continue;
@@ -343,8 +352,8 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
                 const SurfaceHit& refl = reflected[i];
                 oc.insert(make_cache_entry(
                     gb.hits[i], gb.view_dirs[i], view.to_world[o], point[i], value[i], field[i],
-                    mirror[i], refl, refl.valid ? &view.to_world[size_t(refl.object)] : nullptr,
-                    moving, rs.time()));
+                    shading_field[i], mirror[i], refl,
+                    refl.valid ? &view.to_world[size_t(refl.object)] : nullptr, moving, rs.time()));
             }
         }
         const long evicted = rc.evict_oldest(size_t(double(cache->settings.max_megabytes) * 1e6));
@@ -395,7 +404,7 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
     for (size_t i = 0; i < n; ++i) {
         vec3 c(0.0f);
         if (!features[i].valid)
-            c = scene.background(gb.view_dirs[i]);
+            c = rs.background(gb.view_dirs[i]);
         else if (mirror[i])
             c = sampled[i] ? value[i] : rec.value[i];
         else

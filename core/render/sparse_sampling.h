@@ -41,7 +41,9 @@ PixelFeature pixel_feature(const SurfaceHit& hit, const vec3& view_dir, double r
 // max(f_x / W, f_y / H): the angle one pixel subtends (seed §7).
 double radians_per_pixel(const CameraRayGenerator& camera, int width, int height);
 
-constexpr int kUpsampledStats = 4;
+// {occluded, log t_min, occlusion ratio, sigma_V, log luminance of the demodulated shading}:
+// the last one only feeds the cache's observed-change test.
+constexpr int kUpsampledStats = 5;
 using VisibilityStats = std::array<float, kUpsampledStats>;
 
 // Fills `out` at every pixel from the values at `sources` (pixel indices); `found[i]` is false

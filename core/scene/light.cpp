@@ -22,11 +22,12 @@ const char* to_string(LightType type) {
 }
 
 EnvironmentMap::EnvironmentMap(std::string source, std::shared_ptr<const RgbImage> image,
-                               float rotation_deg, float scale)
+                               float rotation_deg, float scale, float spin_deg_per_s)
     : source_(std::move(source)),
       image_(std::move(image)),
       rotation_deg_(rotation_deg),
-      scale_(scale) {
+      scale_(scale),
+      spin_deg_per_s_(spin_deg_per_s) {
     const int w = image_->width, h = image_->height;
     texels_.resize(size_t(w) * h);
     std::vector<float> weights(size_t(w) * h);
@@ -40,6 +41,12 @@ EnvironmentMap::EnvironmentMap(std::string source, std::shared_ptr<const RgbImag
     }
     distribution_ = Distribution2D(weights, w, h);
     for (size_t i = 0; i < texels_.size(); ++i) texels_[i].pdf_uv = distribution_.texel_pdf(int(i));
+}
+
+std::shared_ptr<const EnvironmentMap> EnvironmentMap::at_time(float time) const {
+    auto copy = std::make_shared<EnvironmentMap>(*this);
+    copy->rotation_deg_ = rotation_deg_ + spin_deg_per_s_ * time;
+    return copy;
 }
 
 int EnvironmentMap::texel_index(vec2 uv) const {

@@ -24,7 +24,7 @@ namespace freqlab {
 class EnvironmentMap {
   public:
     EnvironmentMap(std::string source, std::shared_ptr<const RgbImage> image, float rotation_deg,
-                   float scale);
+                   float scale, float spin_deg_per_s = 0.0f);
 
     vec3 eval(const vec3& direction) const;         // the texel's radiance (lighting)
     vec3 eval_smooth(const vec3& direction) const;  // bilinear (direct view)
@@ -37,6 +37,10 @@ class EnvironmentMap {
     const std::string& source() const { return source_; }
     const RgbImage& image() const { return *image_; }
     float rotation_deg() const { return rotation_deg_; }
+    // Rotation about the vertical axis over time (seed §5.2: lighting rotation feeds B_t).
+    float spin_deg_per_s() const { return spin_deg_per_s_; }
+    // The map as it stands at `time` (a copy turned by spin x time; same texels).
+    std::shared_ptr<const EnvironmentMap> at_time(float time) const;
     float scale() const { return scale_; }
     const Distribution2D& distribution() const { return distribution_; }
     vec2 direction_to_uv(const vec3& d) const;
@@ -51,7 +55,7 @@ class EnvironmentMap {
         float pdf_uv;   // sampling density over [0,1)^2: read with the radiance, one miss
     };
     std::vector<Texel> texels_;
-    float rotation_deg_, scale_;
+    float rotation_deg_, scale_, spin_deg_per_s_ = 0.0f;
     Distribution2D distribution_;
 };
 

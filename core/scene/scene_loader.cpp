@@ -238,7 +238,7 @@ Light read_light(const JsonReader& r, LoadContext& ctx) {
     const std::string type =
         r.get("type").one_of({"envmap", "sky", "point", "directional", "quad"});
     if (type == "envmap") {
-        r.only_keys({"type", "file", "radiance", "rotation_deg", "scale"});
+        r.only_keys({"type", "file", "radiance", "rotation_deg", "rotation_deg_per_s", "scale"});
         l.type = LightType::Environment;
         if (r.has("file") == r.has("radiance"))
             r.fail(
@@ -259,7 +259,8 @@ Light read_light(const JsonReader& r, LoadContext& ctx) {
         }
         l.environment = std::make_shared<EnvironmentMap>(
             source, image, float(r.number_or("rotation_deg", 0.0, -1e6, 1e6)),
-            float(r.number_or("scale", 1.0, 0.0, 1e9)));
+            float(r.number_or("scale", 1.0, 0.0, 1e9)),
+            float(r.number_or("rotation_deg_per_s", 0.0, -1e6, 1e6)));
     } else if (type == "sky") {
         r.only_keys({"type", "sun_direction", "sun_radius_deg", "sun_radiance", "zenith", "horizon",
                      "ground", "resolution"});

@@ -18,13 +18,19 @@ const SettingsSchema& CacheSettings::schema() {
                    kInvalidatesCache,
                    "A cached point whose occlusion ratio differs from the one measured at its "
                    "pixel by more than this is discarded (seed §5.3: 0.125).")
+            .field(&CacheSettings::shading_change, "shading_change", 1e-3, 10, "",
+                   kInvalidatesCache,
+                   "The observed half of the temporal test: an entry expires when the initial "
+                   "points' upsampled shading at its pixel changed by more than this (relative) "
+                   "since it was computed; catches moving shadows reaching points lit when "
+                   "computed, which B_t cannot see.")
             .field(&CacheSettings::test_spatial, "test_spatial", 0, 1, "", kInvalidatesCache,
                    "Ablation: the spatial validity test (r_x).")
             .field(&CacheSettings::test_angular, "test_angular", 0, 1, "", kInvalidatesCache,
                    "Ablation: the angular validity test (r_theta).")
             .field(&CacheSettings::test_temporal, "test_temporal", 0, 1, "", kInvalidatesCache,
-                   "Ablation: the temporal lifespan test (B_t); off reproduces the seed's "
-                   "Fig. 14 failure (stale shadows of moving occluders).")
+                   "Ablation: the temporal test (lifespan from B_t and the observed change); "
+                   "off reproduces the seed's Fig. 14 failure (stale moving shadows).")
             .field(&CacheSettings::test_occlusion, "test_occlusion", 0, 1, "", kInvalidatesCache,
                    "Ablation: the occlusion-ratio test.")
             .field(&CacheSettings::merge, "merge", 0, 1, "", kInvalidatesCache,

@@ -11,6 +11,7 @@ struct CacheSettings {
     float q_eps_theta = 1e-4f;           // angular: r_theta = 2 pi eps_theta / B_theta
     float q_eps_t = 1e-7f;               // temporal: lifespan 2 pi eps_t / B_t
     float occlusion_threshold = 0.125f;  // |occlusion ratio change| that discards (§5.3)
+    float shading_change = 0.1f;  // observed relative change of the shading around it (temporal)
     // Ablation switches: each validity test can be turned off.
     bool test_spatial = true;
     bool test_angular = true;
