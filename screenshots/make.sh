@@ -26,5 +26,5 @@ shot sparse_inspector.png scenes/rotor.json --method sparse --frame 0 --overlay 
      --size 1280x1000
 shot cache_decisions.png scenes/rotor.json --method cache --warm-from 0 --frame 6 --overlay cache_decisions \
      --set frame.width=480 --set frame.height=270 --inspect 230,200 --size 1280x1000
-shot cache_decision_layer.png scenes/truck.json --method cache --warm-from 0 --frame 8 --overlay decision \
-     --set frame.width=480 --set frame.height=270
+shot cache_decision_layer.png scenes/truck.json --method cache --warm-from 0 --frame 12 --overlay decision \
+     --set frame.width=480 --set frame.height=270 --size 1280x1000

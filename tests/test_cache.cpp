@@ -211,6 +211,24 @@ TEST(CacheDecisions, MergingKeepsTheWeightedRadianceAndOnlyWithinBothRadii) {
     const std::vector<long> counts = commit_decisions(records, cache);
     EXPECT_EQ(counts[size_t(CacheDecision::Merged)], 1);
     EXPECT_EQ(cache.live_count(), 2u);
+
+    // In time too: d (new, B_t = 100: lifespan 28 us) and e (0.1 s old, B_t = 1e-3: lifespan
+    // 2.8 s) each pass their own tests, but 0.1 s apart is beyond d's lifespan: not merged.
+    for (float d_bt : {100.0f, 0.0f}) {
+        RadianceCache timed;
+        timed.reset(2);
+        CacheEntry d = wall.entry_at(3, 4, 1.0f), e = wall.entry_at(3, 4, 0.9f);
+        d.B_t = d_bt;
+        e.B_t = 1e-3f;
+        timed.object(0).insert(d);
+        timed.object(0).insert(e);
+        std::vector<CacheRecord> r2 = reproject_entries(timed, wall.view, s);
+        ASSERT_EQ(r2[0].decision, CacheDecision::Reused);
+        ASSERT_EQ(r2[1].decision, CacheDecision::Reused);
+        resolve_pixels(r2, timed, wall.view, s);
+        EXPECT_EQ(r2[1].decision, d_bt > 0 ? CacheDecision::Reused : CacheDecision::Merged)
+            << "B_t of the newer entry " << d_bt;
+    }
 }
 
 TEST(RadianceCacheStorage, FreeSlotsAndGrowthKeepEveryLiveEntry) {

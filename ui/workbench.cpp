@@ -135,7 +135,6 @@ void draw_settings_panel(Workbench::State& s) {
     else if (changed & kInvalidatesDisplay)
         s.view_dirty = true;
 
-    if (s.config.method == RenderMethod::Cache) draw_cache_panel(s);
     draw_compare_panel(s);
     draw_tables_panel(*s.tables);
     if (ImGui::CollapsingHeader("Help")) {
@@ -292,6 +291,8 @@ void Workbench::draw(int fb_w, int fb_h) {
     ImGui::SetNextWindowSize(ImVec2(fb_w - left_w - right_w, fb_h - bottom_h - menu_h));
     ImGui::Begin("Viewport", nullptr, fixed);
     draw_viewport(s);
+    // Method A's cache: what each frame reused, shaded anew and discarded, under the image.
+    if (s.config.method == RenderMethod::Cache && !s.show_env_bandwidth) draw_cache_panel(s);
     ImGui::End();
 
     ImGui::SetNextWindowPos(ImVec2(fb_w - right_w, menu_h));

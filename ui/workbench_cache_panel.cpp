@@ -60,7 +60,13 @@ void draw_cache_panel(Workbench::State& s) {
     ImGui::Text("frame %d: %ld entries, %.1f MB (%.0f B/entry)", s.frame, points, bytes / 1e6,
                 points ? double(bytes) / double(points) : 0.0);
     const ImVec2 origin = ImGui::GetCursorScreenPos();
-    const float width = ImGui::GetContentRegionAvail().x, height = 150.0f;
+    const float width = ImGui::GetContentRegionAvail().x, height = 120.0f;
+    // The x axis spans the frames rendered so far (at least 10).
+    int last = 9;
+    for (const Series& x : series)
+        for (int f = 0; f < frames; ++f)
+            if (x.values[size_t(f)] > 0) last = std::max(last, f);
+    const int span = std::min(last + 1, frames);
     ImDrawList* dl = ImGui::GetWindowDrawList();
     dl->AddRectFilled(origin, ImVec2(origin.x + width, origin.y + height),
                       IM_COL32(25, 25, 28, 255));
@@ -72,10 +78,10 @@ void draw_cache_panel(Workbench::State& s) {
         return origin.y + height - 4.0f - t * (height - 8.0f);
     };
     auto map_x = [&](int f) {
-        return origin.x + 4.0f + (width - 8.0f) * float(f) / std::max(frames - 1, 1);
+        return origin.x + 4.0f + (width - 8.0f) * float(f) / std::max(span - 1, 1);
     };
     for (const Series& x : series)
-        for (int f = 1; f < frames; ++f)
+        for (int f = 1; f < span; ++f)
             if (x.values[size_t(f - 1)] > 0 || x.values[size_t(f)] > 0)
                 dl->AddLine(ImVec2(map_x(f - 1), map_y(x.values[size_t(f - 1)])),
                             ImVec2(map_x(f), map_y(x.values[size_t(f)])), colour_u32(x.colour),
@@ -88,8 +94,8 @@ void draw_cache_panel(Workbench::State& s) {
     ImGui::Dummy(ImVec2(width, height));
     if (ImGui::IsItemHovered()) {
         const int f = std::clamp(int(std::lround((ImGui::GetMousePos().x - origin.x - 4.0f) /
-                                                 (width - 8.0f) * (frames - 1))),
-                                 0, frames - 1);
+                                                 (width - 8.0f) * (span - 1))),
+                                 0, span - 1);
         ImGui::BeginTooltip();
         ImGui::Text("frame %d", f);
         for (const Series& x : series)

@@ -150,7 +150,13 @@ std::vector<int> resolve_pixels(std::vector<CacheRecord>& records, RadianceCache
                                        validity_radius(settings.q_eps_x, eo.B_x));
             const double rth = std::min(validity_radius(settings.q_eps_theta, ek.B_theta),
                                         validity_radius(settings.q_eps_theta, eo.B_theta));
-            if (dx > rx || dth > rth) continue;
+            // Values from different times merge only within both lifespans (B_t): averaging a
+            // point computed before a moving shadow arrived with one computed after would blur
+            // the shadow in time (static scenes: infinite lifespans, always allowed).
+            const double dt = std::abs(double(ek.created) - double(eo.created));
+            const double rt = std::min(validity_radius(settings.q_eps_t, ek.B_t),
+                                       validity_radius(settings.q_eps_t, eo.B_t));
+            if (dx > rx || dth > rth || dt > rt) continue;
             const float wsum = ek.weight + eo.weight;
             ek.shading = (ek.weight * ek.shading + eo.weight * eo.shading) / wsum;
             ek.weight = wsum;

@@ -11,7 +11,8 @@
 // | mirrors  | the pixel's reflection is re-traced (by the caller): same reflected object,    |
 // |          | spatial test on the reflected point                                             |
 // | keeper   | per pixel the youngest survivor (then the heaviest); the others merge into it  |
-// |          | when each lies within the other's r_x and r_theta, else stay unused this frame |
+// |          | when each lies within the other's r_x and r_theta and their creation times    |
+// |          | within both lifespans (seed Fig. 13, extended in time), else stay unused     |
 // | merge    | value = (w_k L_k + w_o L_o) / (w_k + w_o), weight w_k + w_o (the keeper's      |
 // |          | bandwidths and creation time stay)                                              |
 #pragma once

@@ -9,6 +9,8 @@
 namespace freqlab {
 
 bool scene_has_motion(const Scene& scene) {
+    if (const EnvironmentMap* env = scene.environment(); env && env->spin_deg_per_s() != 0.0f)
+        return true;
     for (const SceneObject& o : scene.objects)
         if (!o.animation.is_static()) return true;
     return false;

@@ -3,7 +3,7 @@
 //
 // | step        | rule                                                                        |
 // |-------------|-----------------------------------------------------------------------------|
-// | stand-ins   | when no object moves, a kept entry landing on an initial pixel stands in for |
+// | stand-ins   | when nothing moves, a kept entry landing on an initial pixel stands in for   |
 // |             | the initial radiance point (its statistics feed the upsampling): visibility |
 // |             | cannot have changed; otherwise initial points are shaded (Algorithm 1)       |
 // | coverage    | each reused entry splats its pixel's density d over a disk of area 1 / d    |
@@ -33,7 +33,8 @@ struct CacheState {
 // The per-pixel categories of the `decision` layer.
 enum class PixelDecision : int { None = 0, Reused, NewInitial, NewAdaptive, NewFallback };
 
-// Whether any object of the scene moves (stand-ins are allowed only when none does).
+// Whether any object of the scene moves or its environment turns (stand-ins, and the observed
+// half of the temporal test, only matter when something does).
 bool scene_has_motion(const Scene& scene);
 
 // For each pixel, the youngest kept record landing on it (-1: none); no merging.

@@ -132,6 +132,7 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
     std::vector<float> footprint;
     std::vector<CacheRecord>& records = result.cache_records;
     std::vector<int> standin(n, -1);  // initial pixels a kept entry stands in for
+    const bool moves = scene_has_motion(scene);
     if (cache) {
         reflected.resize(n);
         footprint.resize(n);
@@ -150,7 +151,7 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
         for (size_t o = 0; o < scene.objects.size(); ++o)
             view.to_world.push_back(rs.object_to_world(int(o)));
         records = reproject_entries(cache->state.cache, view, cache->settings);
-        if (!scene_has_motion(scene))
+        if (!moves)
             standin = first_survivors(records, int(n), cache->state.cache);
         result.stats["stages"]["reproject"] = ms_since(t0);
     }
@@ -221,7 +222,9 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
         t0 = Clock::now();
         for (size_t i = 0; i < n; ++i) {
             field[i] = found[i] ? stats[i][2] : mu_v[i];
-            shading_field[i] = found[i] ? stats[i][4] : NAN;
+            // Only when something moves can the shading change in time (the view's own changes
+            // are the angular test's): a camera moving through a still scene expires nothing.
+            shading_field[i] = found[i] && moves ? stats[i][4] : NAN;
         }
         apply_field_tests(records, field, shading_field, found, cache->settings);
         keeper = resolve_pixels(records, cache->state.cache, view, cache->settings);
