@@ -300,14 +300,29 @@ TEST(RadianceCacheStorage, EvictionRemovesTheOldestFirst) {
             if (cache.object(o).live(int(s))) EXPECT_GE(cache.object(o).get(int(s)).created, 4.0f);
 }
 
-TEST(CachePipeline, StaticSceneSecondFrameShadesNothingAndMatches) {
+namespace {
+
+// rotor.json with its blades stopped (nothing moves), and a small render of a method.
+Scene still_rotor() {
     Scene scene = load_scene(std::string(FREQLAB_SOURCE_DIR) + "/scenes/rotor.json");
-    for (SceneObject& o : scene.objects) o.animation.spin_rad_per_s = 0.0f;  // nothing moves
+    for (SceneObject& o : scene.objects) o.animation.spin_rad_per_s = 0.0f;
+    return scene;
+}
+
+RenderConfig small_config(RenderMethod method, int width, int height, int max_samples) {
     RenderConfig config;
-    config.method = RenderMethod::Cache;
-    config.frame.width = 160;
-    config.frame.height = 90;
-    config.points.max_samples = 64;
+    config.method = method;
+    config.frame.width = width;
+    config.frame.height = height;
+    config.points.max_samples = max_samples;
+    return config;
+}
+
+}  // namespace
+
+TEST(CachePipeline, StaticSceneSecondFrameShadesNothingAndMatches) {
+    const Scene scene = still_rotor();
+    const RenderConfig config = small_config(RenderMethod::Cache, 160, 90, 64);
     EmbreeDevice device;
     FrameRenderer renderer(scene, config, device);
     Progress progress;
@@ -323,13 +338,8 @@ TEST(CachePipeline, StaticSceneSecondFrameShadesNothingAndMatches) {
 }
 
 TEST(CachePipeline, NothingMovingMeansNoTemporalBandwidthAndASpinningSkyFeedsIt) {
-    Scene scene = load_scene(std::string(FREQLAB_SOURCE_DIR) + "/scenes/rotor.json");
-    for (SceneObject& o : scene.objects) o.animation.spin_rad_per_s = 0.0f;
-    RenderConfig config;
-    config.method = RenderMethod::Points;
-    config.frame.width = 64;
-    config.frame.height = 36;
-    config.points.max_samples = 32;
+    Scene scene = still_rotor();
+    const RenderConfig config = small_config(RenderMethod::Points, 64, 36, 32);
     EmbreeDevice device;
     Progress progress;
     auto render = [&](const Scene& sc) {
