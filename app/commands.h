@@ -41,6 +41,21 @@ struct BenchArgs {
     int error_every = 10;  // cache studies: RMSE against the reference on every k-th frame
 };
 int run_bench(const BenchArgs& args);
+
+struct BakeArgs {
+    std::string scene = "builtin:default";
+    std::string method = "impulse";
+    int spp = 0;    // 0 keeps bake.spp
+    int seed = -1;  // -1 keeps bake.seed
+    int threads = 0;
+    std::vector<std::string> sets;
+    std::string reference;  // a directory of a reference bake: errors per lightmap
+    bool compare_surface = false;
+    std::string debug_texel;  // [LIGHTMAP:]X,Y
+    bool quiet = false;
+    std::string out;
+};
+int run_bake(const BakeArgs& args);          // bake.cpp
 int run_bench_cache(const BenchArgs& args);  // studies cache, cache-ablation (bench_cache.cpp)
 
 struct FigureArgs {

@@ -14,14 +14,6 @@
 
 namespace {
 
-int not_yet(const char* what) {
-    std::fprintf(stderr,
-                 "freqlab %s: not implemented yet — it lands with its issue (see "
-                 "`issues list`). Implemented: gui, render --method gbuffer, compare.\n",
-                 what);
-    return 2;
-}
-
 // No display: say so and take the headless route, naming the PNG it writes.
 int headless_fallback(const std::string& scene, int frame) {
     std::string stem = std::filesystem::path(scene).stem().string();
@@ -140,8 +132,22 @@ int main(int argc, char** argv) {
                        "1, N or all (multiple scattering: point emitters)");
     std::string tables_out;
     tables->add_option("--out", tables_out, "table file to write (default: the cache)");
-    auto* bake = app.add_subcommand("bake", "lightmap / probe baking with media (to come)");
-    bake->allow_extras();
+    freqlab::BakeArgs bk;
+    auto* bake = app.add_subcommand("bake", "method B: lightmap baking with participating media");
+    bake->add_option("scene", bk.scene, "scene file");
+    bake->add_option("--method", bk.method, "surface|extinction|impulse|vpt");
+    bake->add_option("--spp", bk.spp, "paths per texel (bake.spp)");
+    bake->add_option("--seed", bk.seed, "random seed (bake.seed)");
+    bake->add_option("--threads", bk.threads, "worker threads (0 = all cores)");
+    bake->add_option("--set", bk.sets, "key=value setting (repeatable)");
+    bake->add_option("--reference", bk.reference,
+                     "directory of a reference bake: relMSE / RMSE per lightmap layer");
+    bake->add_flag("--compare-surface", bk.compare_surface,
+                   "also run a surface bake at equal samples and report the overhead");
+    bake->add_option("--debug-texel", bk.debug_texel,
+                     "[LIGHTMAP:]X,Y: print the texel and every method's estimate there");
+    bake->add_flag("--quiet", bk.quiet, "no progress bar");
+    bake->add_option("--out", bk.out, "output directory")->required();
     freqlab::BenchArgs ba;
     auto* bench = app.add_subcommand("bench", "rays-vs-error studies of method A against MIS");
     bench->add_option("scene", ba.scene, "scene file");
@@ -168,7 +174,7 @@ int main(int argc, char** argv) {
                 return freqlab::run_tables_generate(tables_out, freqlab::kDefaultTableBounces);
             return freqlab::run_tables_query(tq);
         }
-        if (*bake) return not_yet("bake");
+        if (*bake) return freqlab::run_bake(bk);
         if (*bench) return freqlab::run_bench(ba);
             // `freqlab` alone, or `freqlab gui ...`
 #ifdef FREQLAB_HAS_UI

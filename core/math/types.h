@@ -8,6 +8,7 @@
 namespace freqlab {
 
 using glm::ivec2;
+using glm::ivec3;
 using glm::mat3;
 using glm::mat4;
 using glm::quat;

@@ -4,21 +4,13 @@
 #include <cmath>
 
 #include "base/error.h"
+#include "base/stopwatch.h"
 #include "render/gbuffer.h"
 #include "render/points_pass.h"
 #include "render/shading_pass.h"
 #include "render/sparse_pass.h"
 
 namespace freqlab {
-
-namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-}  // namespace
 
 const std::vector<std::string>& render_method_names() {
     static const std::vector<std::string> names = {"gbuffer", "mis",    "reference",

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "base/stopwatch.h"
 #include "render/cache_pass.h"
 #include "render/points_pass.h"
 #include "render/reconstruction.h"
@@ -14,11 +15,6 @@
 namespace freqlab {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 // Per-channel demodulation by the texture value (textures multiply after reconstruction).
 float log_luminance(const vec3& shading) {
@@ -151,8 +147,7 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
         for (size_t o = 0; o < scene.objects.size(); ++o)
             view.to_world.push_back(rs.object_to_world(int(o)));
         records = reproject_entries(cache->state.cache, view, cache->settings);
-        if (!moves)
-            standin = first_survivors(records, int(n), cache->state.cache);
+        if (!moves) standin = first_survivors(records, int(n), cache->state.cache);
         result.stats["stages"]["reproject"] = ms_since(t0);
     }
 

@@ -12,6 +12,7 @@
 #include "scene/camera.h"
 #include "scene/light.h"
 #include "scene/material.h"
+#include "scene/medium_desc.h"
 #include "scene/mesh.h"
 
 namespace freqlab {
@@ -38,7 +39,7 @@ struct Scene {
     std::vector<Material> materials;
     std::vector<SceneObject> objects;
     std::vector<Light> lights;
-    nlohmann::json media = nlohmann::json::array();  // reserved for method B
+    std::vector<MediumDesc> media;  // method B's participating media (empty: none)
 
     float time_of_frame(int frame) const { return float(frame) / fps; }
     bool is_static() const;  // nothing moves: no object animation, static camera

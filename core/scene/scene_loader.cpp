@@ -399,11 +399,7 @@ Scene parse_scene(const std::string& text, const std::string& origin,
         }
     }
     if (root.has("media")) {
-        const JsonReader media = root.get("media");
-        media.array_size();  // reserved: must be an array; its entries arrive with method B
-        if (!media.raw().empty())
-            media.fail("participating media are not supported yet (method B); expected []");
-        scene.media = media.raw();
+        scene.media = parse_media(root.get("media"), scene_dir);
     }
     return scene;
 }

@@ -1,0 +1,192 @@
+// `freqlab bake`: method B's lightmap bakers from the command line (issue "Method B, part 2").
+// Writes DIR/<lightmap>.exr (every lm_* layer and texel_valid), DIR/<lightmap>.png (lm_total)
+// and DIR/stats.json: per-stage times, rays, texels, table queries, and when asked the overhead
+// against a surface bake at equal samples and the error against a reference bake directory.
+#include <tbb/global_control.h>
+
+#include <cstdio>
+#include <filesystem>
+
+#include "base/error.h"
+#include "base/file_io.h"
+#include "base/stopwatch.h"
+#include "commands.h"
+#include "image/colormap.h"
+#include "image/image_io.h"
+#include "scene/scene_loader.h"
+#include "settings/settings_group.h"
+#include "volume/impulse_tables.h"
+#include "volume/lightmap_baker.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace freqlab {
+
+namespace {
+
+json error_against(const fs::path& reference_dir, const std::string& name, const LayerSet& test) {
+    const fs::path file = reference_dir / (name + ".exr");
+    if (!fs::exists(file))
+        throw Error(file.string(), "--reference", "no reference lightmap for '" + name + "'");
+    const ExrFile ref = read_exr(file);
+    json out = json::object();
+    for (const char* layer : {"lm_irradiance", "lm_total", "lm_surface", "lm_inscatter_single",
+                              "lm_inscatter_multiple"}) {
+        if (!ref.layers.find(layer) || !test.find(layer)) continue;
+        const LightmapError e = compare_lightmaps(test, ref.layers, layer);
+        out[layer] = {
+            {"relmse", e.relmse}, {"rmse", e.rmse}, {"rel_l2", e.rel_l2}, {"texels", e.texels}};
+    }
+    return out;
+}
+
+// Every method's mean estimate at one texel, side by side (same samples count, same keys).
+void print_debug_texel(const RayScene& rays, const Media& media, const ImpulseTables* tables,
+                       const BakeSettings& settings, const LightmapBaker& baker,
+                       const std::string& spec) {
+    const Scene& scene = rays.scene();
+    std::string name, xy = spec;
+    if (const size_t colon = spec.find(':'); colon != std::string::npos) {
+        name = spec.substr(0, colon);
+        xy = spec.substr(colon + 1);
+    }
+    int x = -1, y = -1;
+    if (std::sscanf(xy.c_str(), "%d,%d", &x, &y) != 2)
+        throw Error("--debug-texel", spec, "expected [LIGHTMAP:]X,Y");
+    const ObjectLightmap* map = nullptr;
+    for (const ObjectLightmap& m : baker.lightmaps())
+        if (name.empty() || lightmap_name(scene, m) == name) {
+            map = &m;
+            break;
+        }
+    if (!map) throw Error("--debug-texel", spec, "no lightmap named '" + name + "'");
+    if (x < 0 || y < 0 || x >= map->width || y >= map->height)
+        throw Error("--debug-texel", spec,
+                    "expected a texel inside " + std::to_string(map->width) + "x" +
+                        std::to_string(map->height));
+    const LightmapTexel& t = map->texels[size_t(y) * map->width + x];
+    std::printf(
+        "texel %d,%d of %s: state %s, position (%g, %g, %g), normal (%g, %g, %g), "
+        "albedo (%g, %g, %g)\n",
+        x, y, lightmap_name(scene, *map).c_str(), texel_state_legend()[size_t(t.state)].c_str(),
+        t.position.x, t.position.y, t.position.z, t.normal.x, t.normal.y, t.normal.z, t.albedo.x,
+        t.albedo.y, t.albedo.z);
+    if (t.state != TexelState::Valid) return;
+    const HomogeneousMedium here = media.at(t.position);
+    std::printf("  medium here: sigma_s %g, sigma_a %g, g %g\n", here.sigma_s, here.sigma_a,
+                here.g);
+    std::printf(
+        "  irradiance (luminance) over %d paths:   surface      single    multiple"
+        "       total\n",
+        settings.spp);
+    for (BakeMethod m :
+         {BakeMethod::Surface, BakeMethod::Extinction, BakeMethod::Impulse, BakeMethod::Vpt}) {
+        if (m == BakeMethod::Impulse && !tables && !media.empty()) continue;
+        const BakeEstimator estimator(rays, media, tables, m, settings);
+        IrradianceParts sum;
+        BakeCounters counters;
+        for (int s = 0; s < settings.spp; ++s) {
+            CounterRng rng(uint64_t(settings.seed), 0, size_t(y) * map->width + x, uint64_t(s));
+            sum += estimator.estimate(t.position, t.normal, t.albedo, rng, counters);
+        }
+        const float inv = 1.0f / float(settings.spp);
+        std::printf("  %-10s %31.6g %11.6g %11.6g %11.6g\n", to_string(m),
+                    luminance(sum.surface) * inv, luminance(sum.single) * inv,
+                    luminance(sum.multiple) * inv, luminance(sum.total()) * inv);
+    }
+}
+
+}  // namespace
+
+int run_bake(const BakeArgs& args) {
+    const BakeMethod method = parse_bake_method(args.method);
+    BakeSettings settings;
+    SettingsGroup group;
+    group.bind(BakeSettings::schema(), &settings);
+    for (const std::string& s : args.sets) group.apply_assignment(s);
+    if (args.spp > 0) group.apply_assignment("bake.spp=" + std::to_string(args.spp), "--spp");
+    if (args.seed >= 0) group.apply_assignment("bake.seed=" + std::to_string(args.seed), "--seed");
+    if (args.out.empty()) throw Error("--out", "", "expected an output directory");
+    if (!args.reference.empty() && !fs::is_directory(args.reference))
+        throw Error(args.reference, "--reference", "expected a directory written by freqlab bake");
+
+    // Everything that can be wrong with the input is checked before any output exists.
+    const Scene scene = load_scene(args.scene);
+    const Media media(scene.media, scene.source);
+    std::unique_ptr<tbb::global_control> limit;
+    if (args.threads > 0)
+        limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                      size_t(args.threads));
+    EmbreeDevice device(args.threads);
+    RayScene rays(scene, device);
+    rays.update(0.0f);
+
+    // No media: no tables are loaded or built (the impulse bake is then the surface bake).
+    std::unique_ptr<ImpulseTables> tables;
+    double tables_ms = 0.0;
+    if (method == BakeMethod::Impulse && !media.empty()) {
+        const auto t0 = Clock::now();
+        tables = std::make_unique<ImpulseTables>(ImpulseTables::cached(kDefaultTableBounces));
+        tables_ms = ms_since(t0);
+    }
+    std::error_code ec;
+    fs::create_directories(args.out, ec);
+    if (ec || !fs::is_directory(args.out))
+        throw Error(args.out, "--out", "cannot create the output directory: " + ec.message());
+
+    LightmapBaker baker(rays, media, tables.get(), method, settings);
+    Progress progress;
+    {
+        TerminalProgressBar bar(progress, !args.quiet && stderr_is_terminal());
+        baker.run(&progress);
+    }
+    BakeStats stats = baker.stats();
+    stats.tables_ms = tables_ms;
+    json report = {{"scene", args.scene},         {"method", to_string(method)},
+                   {"media", long(media.size())}, {"tables_loaded", bool(tables)},
+                   {"threads", args.threads},     {"settings", group.to_json()},
+                   {"stats", stats.to_json()}};
+    if (args.compare_surface && method != BakeMethod::Surface) {
+        LightmapBaker surface(rays, media, nullptr, BakeMethod::Surface, settings);
+        surface.run(nullptr);
+        report["surface_bake_ms"] = surface.stats().bake_ms;
+        report["overhead"] = stats.bake_ms / surface.stats().bake_ms;
+    }
+    json maps = json::array();
+    for (size_t i = 0; i < baker.lightmaps().size(); ++i) {
+        const ObjectLightmap& map = baker.lightmaps()[i];
+        const std::string name = lightmap_name(scene, map);
+        const LayerSet layers = baker.layers(i);
+        const json provenance = {{"freqlab", "0.1"},
+                                 {"scene", args.scene},
+                                 {"method", to_string(method)},
+                                 {"lightmap", name},
+                                 {"settings", group.to_json()}};
+        write_exr(fs::path(args.out) / (name + ".exr"), layers, provenance);
+        DisplayParams display;
+        write_png(fs::path(args.out) / (name + ".png"), layers.width(), layers.height(),
+                  layer_to_rgb8(layers, layers.get("lm_total"), display));
+        json entry = {{"name", name},
+                      {"object", map.object},
+                      {"width", map.width},
+                      {"height", map.height},
+                      {"charts", map.charts},
+                      {"texel_density", map.texel_density},
+                      {"texels_valid", long(map.count(TexelState::Valid))},
+                      {"texels_inside_geometry", long(map.count(TexelState::InsideGeometry))}};
+        if (!args.reference.empty()) entry["error"] = error_against(args.reference, name, layers);
+        maps.push_back(entry);
+    }
+    report["lightmaps"] = maps;
+    if (!args.debug_texel.empty())
+        print_debug_texel(rays, media, tables.get(), settings, baker, args.debug_texel);
+    write_text_atomically(fs::path(args.out) / "stats.json", report.dump(2) + "\n");
+    if (!args.quiet)
+        std::printf("baked %zu lightmap(s) with %s at %d spp in %.0f ms -> %s\n",
+                    baker.lightmaps().size(), to_string(method), stats.samples, stats.bake_ms,
+                    args.out.c_str());
+    return 0;
+}
+
+}  // namespace freqlab

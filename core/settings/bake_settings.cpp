@@ -1,0 +1,39 @@
+#include "settings/bake_settings.h"
+
+namespace freqlab {
+
+const SettingsSchema& BakeSettings::schema() {
+    static const SettingsSchema s =
+        SchemaBuilder<BakeSettings>("bake", "Lightmap bake")
+            .field(&BakeSettings::spp, "spp", 1, 1 << 20, "samples", kInvalidatesBake,
+                   "Paths per texel (a progressive bake adds them in passes).")
+            .field(&BakeSettings::bounces, "bounces", 0, 16, "", kInvalidatesBake,
+                   "Indirect surface bounces: 0 bakes direct light only.")
+            .field(&BakeSettings::media_bounces, "media_bounces", 1, 256, "", kInvalidatesBake,
+                   "Scattering events in media: 1 = single scattering; impulse uses bounces "
+                   "2..K of the tables (capped by the table file), vpt stops its walk there.")
+            .choice(&BakeSettings::back_scatter, "back_scatter", {"off", "albedo", "on"},
+                    kInvalidatesBake,
+                    "Impulse's back-scatter compensation (seed §5.2): off = infinite-medium "
+                    "tables; on = the shifted-receiver tables everywhere; albedo = blended by "
+                    "the receiver's albedo (light reflected into the medium by the surface "
+                    "itself scales with it; a black receiver gets none).")
+            .field(&BakeSettings::texel_density, "texel_density", 0.01, 4096, "texels/unit",
+                   kInvalidatesBake, "Lightmap resolution: texels per scene unit.")
+            .field(&BakeSettings::max_size, "max_size", 16, 8192, "texels", kInvalidatesBake,
+                   "An atlas side never exceeds this; the density drops to fit.")
+            .field(&BakeSettings::padding, "padding", 1, 16, "texels", kInvalidatesBake,
+                   "Gutter around each chart.")
+            .field(&BakeSettings::backface_tolerance, "backface_tolerance", 0, 1, "",
+                   kInvalidatesBake,
+                   "A texel whose rays hit back faces more often than this lies inside "
+                   "geometry and is flagged invalid (then dilated over).")
+            .field(&BakeSettings::dilation, "dilation", 0, 16, "texels", kInvalidatesBake,
+                   "Rings of empty / invalid texels filled from their valid neighbours.")
+            .field(&BakeSettings::seed, "seed", 0, 1 << 30, "", kInvalidatesBake,
+                   "Random seed of the bake (results never depend on the thread count).")
+            .build();
+    return s;
+}
+
+}  // namespace freqlab

@@ -1,0 +1,28 @@
+// Settings of method B's lightmap bakers (issue "Method B, part 2"; seed, Deuxième article §5,
+// §5.2, §6). The method itself (surface / extinction / impulse / vpt) is chosen on the command
+// line or in the workbench, like render methods.
+#pragma once
+
+#include <cstdint>
+
+#include "settings/schema.h"
+
+namespace freqlab {
+
+enum class BackScatter { Off, Albedo, On };
+
+struct BakeSettings {
+    int spp = 64;            // paths per texel
+    int bounces = 2;         // indirect surface bounces after the first vertex
+    int media_bounces = 30;  // scattering events in media: 1 = single scattering only
+    BackScatter back_scatter = BackScatter::Albedo;
+    float texel_density = 16.0f;  // texels per scene unit
+    int max_size = 1024;          // atlas side limit
+    int padding = 2;              // gutter texels per chart
+    float backface_tolerance = 0.3f;
+    int dilation = 2;  // rings of texels filled around charts after a bake
+    int seed = 0;
+    static const SettingsSchema& schema();
+};
+
+}  // namespace freqlab

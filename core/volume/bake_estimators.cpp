@@ -1,0 +1,376 @@
+#include "volume/bake_estimators.h"
+
+#include <limits>
+
+#include "base/error.h"
+#include "math/sampling.h"
+#include "math/sh.h"
+
+namespace freqlab {
+
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+float max_abs_component(const vec3& v) {
+    return std::max(std::abs(v.x), std::max(std::abs(v.y), std::abs(v.z)));
+}
+
+// A direction whose cosine with `axis` follows HG(g): where light came from before it was
+// scattered into `axis`'s direction of travel reversed.
+vec3 sample_hg(float g, const vec3& axis, float u1, float u2) {
+    float cos_t;
+    if (std::abs(g) < 1e-3f) {
+        cos_t = 1.0f - 2.0f * u1;
+    } else {
+        const float s = (1.0f - g * g) / (1.0f - g + 2.0f * g * u1);
+        cos_t = (1.0f + g * g - s * s) / (2.0f * g);
+    }
+    cos_t = std::clamp(cos_t, -1.0f, 1.0f);
+    const float sin_t = std::sqrt(std::max(0.0f, 1.0f - cos_t * cos_t));
+    const float phi = kTwoPi * u2;
+    return Frame(axis).to_world(vec3(sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t));
+}
+
+bool finite(const vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+}  // namespace
+
+const char* to_string(BakeMethod m) {
+    switch (m) {
+        case BakeMethod::Surface:
+            return "surface";
+        case BakeMethod::Extinction:
+            return "extinction";
+        case BakeMethod::Impulse:
+            return "impulse";
+        case BakeMethod::Vpt:
+            return "vpt";
+    }
+    return "?";
+}
+
+BakeMethod parse_bake_method(const std::string& text) {
+    for (BakeMethod m :
+         {BakeMethod::Surface, BakeMethod::Extinction, BakeMethod::Impulse, BakeMethod::Vpt})
+        if (text == to_string(m)) return m;
+    throw Error("--method", text, "expected surface, extinction, impulse or vpt");
+}
+
+struct BakeEstimator::EmitterSample {
+    EmitterKind kind = EmitterKind::Point;
+    vec3 dir{0.0f};               // from the receiver towards the emitter, unit
+    double distance = kInfinity;  // to the emitter (infinity: directional, environment)
+    vec3 irradiance{0.0f};        // at normal incidence, before transmittance and visibility
+    vec3 intensity{0.0f};         // the tables' emitter strength (I, E0 or L x area)
+    vec3 emitter_normal{0.0f};    // area emitters
+    double shift = 0.0;           // area emitters: sin(angle of the emitter normal to -dir)
+};
+
+BakeEstimator::BakeEstimator(const RayScene& scene, const Media& media, const ImpulseTables* tables,
+                             BakeMethod method, const BakeSettings& settings)
+    : scene_(scene), media_(media), tables_(tables), method_(method), settings_(settings) {
+    if (method == BakeMethod::Impulse && !media.empty() && !tables)
+        throw Error("", "--method", "impulse needs the impulse-response tables");
+    if (tables) table_bounces_ = tables->bounces();
+    zh_clamped_cosine(kImpulseOrder, cosine_zh_);
+}
+
+vec3 BakeEstimator::origin(const vec3& p, const vec3& n) const {
+    return p + n * (2e-4f * std::max(1.0f, max_abs_component(p)));
+}
+
+bool BakeEstimator::visible(const vec3& from, const vec3& n, const vec3& dir, double distance,
+                            BakeCounters& counters) const {
+    ++counters.rays;
+    Ray ray{origin(from, n), dir, 0.0f,
+            std::isfinite(distance) ? float(distance) * (1.0f - 1e-4f) : INFINITY};
+    return !scene_.occluded(ray);
+}
+
+void BakeEstimator::sample_emitters(const vec3& p, CounterRng& rng,
+                                    std::vector<EmitterSample>& out) const {
+    out.clear();
+    for (const Light& light : scene_.scene().lights) {
+        EmitterSample s;
+        switch (light.type) {
+            case LightType::Point: {
+                const vec3 to = light.position - p;
+                const float d2 = glm::dot(to, to);
+                if (d2 <= 0.0f) continue;
+                s.kind = EmitterKind::Point;
+                s.distance = std::sqrt(d2);
+                s.dir = to / float(s.distance);
+                s.irradiance = light.intensity / d2;
+                s.intensity = light.intensity;
+                break;
+            }
+            case LightType::Directional:
+                s.kind = EmitterKind::Directional;
+                s.dir = -light.direction;
+                s.irradiance = s.intensity = light.intensity;
+                break;
+            case LightType::Quad: {
+                const float u1 = rng.next_float(), u2 = rng.next_float();
+                const vec3 q = light.corner + u1 * light.edge_u + u2 * light.edge_v;
+                const vec3 cross = glm::cross(light.edge_u, light.edge_v);
+                const float area = glm::length(cross);
+                const vec3 nl = cross / area;
+                const vec3 to = q - p;
+                const float d2 = glm::dot(to, to);
+                if (d2 <= 0.0f) continue;
+                s.kind = EmitterKind::Area;
+                s.distance = std::sqrt(d2);
+                s.dir = to / float(s.distance);
+                const float cos_l = -glm::dot(s.dir, nl);
+                if (cos_l <= 0.0f) continue;
+                s.irradiance = light.intensity * (area * cos_l / d2);
+                s.intensity = light.intensity * area;
+                s.emitter_normal = nl;
+                s.shift = std::sqrt(std::max(0.0f, 1.0f - cos_l * cos_l));
+                break;
+            }
+            case LightType::Environment:
+            case LightType::Sky: {
+                const EnvironmentMap* env = scene_.environment();
+                if (!env) continue;
+                const vec4 u(rng.next_float(), rng.next_float(), rng.next_float(),
+                             rng.next_float());
+                float pdf = 0.0f;
+                const vec3 radiance = env->sample(u, &s.dir, &pdf);
+                if (!(pdf > 0.0f)) continue;
+                s.kind = EmitterKind::Directional;
+                s.irradiance = s.intensity = radiance / pdf;
+                break;
+            }
+        }
+        out.push_back(s);
+    }
+}
+
+void BakeEstimator::add_scattered(EmitterKind kind, const vec3& intensity, const vec3& dir,
+                                  double distance, double shift, const vec3& emitter_normal,
+                                  const SegmentOptics& optics, const vec3& n, float albedo_lum,
+                                  IrradianceParts& out, BakeCounters& counters) const {
+    const HomogeneousMedium m = optics.effective();
+    if (!(m.sigma_s > 0.0) || !std::isfinite(distance) || !(distance > 0.0)) return;
+    // Beyond the tables' last optical distance every path is attenuated by more than e^-40.
+    if (m.sigma_t() * distance > ZhDistanceTable::kMaxD) return;
+    ImpulseQuery q;
+    q.emitter = kind;
+    q.distance = distance;
+    q.shift = std::clamp(shift, 0.0, 1.0);
+    q.medium = m;
+    // The tables cover |g| <= kGRange; stronger anisotropy is clamped (stated in the header).
+    q.medium.g = std::clamp(m.g, -kGRange, kGRange);
+    q.last_bounce = std::min(settings_.media_bounces, table_bounces_);
+    double w_surface = 0.0;
+    switch (settings_.back_scatter) {
+        case BackScatter::Off:
+            w_surface = 0.0;
+            break;
+        case BackScatter::On:
+            w_surface = 1.0;
+            break;
+        case BackScatter::Albedo:
+            w_surface = std::clamp(double(albedo_lum), 0.0, 1.0);
+            break;
+    }
+    ZhVector single{}, multiple{};
+    double tilt = 0.0;
+    for (int v = 0; v < 2; ++v) {
+        const double w = v == 0 ? 1.0 - w_surface : w_surface;
+        if (w <= 0.0) continue;
+        q.variant = v == 0 ? TableVariant::Infinite : TableVariant::Surface;
+        const ImpulseResponse r = query_impulse(*tables_, q);
+        ++counters.impulse_queries;
+        for (int l = 0; l < kImpulseOrder; ++l) {
+            single[size_t(l)] += w * r.single[size_t(l)];
+            multiple[size_t(l)] += w * r.multiple[size_t(l)];
+        }
+        tilt = r.axis_tilt;  // the same for both variants (fitted per distance and shift)
+    }
+    const glm::dvec3 l(dir);
+    glm::dvec3 axis = l;
+    if (kind == EmitterKind::Area && tilt != 0.0) {
+        glm::dvec3 t = glm::dvec3(emitter_normal) - glm::dot(glm::dvec3(emitter_normal), l) * l;
+        const double len = glm::length(t);
+        if (len > 1e-9) axis = std::cos(tilt) * l + std::sin(tilt) * (t / len);
+    }
+    const glm::dvec3 nd(n);
+    const double e_single = zh_double_product(kImpulseOrder, single.data(), axis, cosine_zh_, nd);
+    const double e_multiple = zh_double_product(kImpulseOrder, multiple.data(), l, cosine_zh_, nd);
+    // A truncated ZH lobe rings slightly negative far from its axis; irradiance cannot.
+    out.single += intensity * float(std::max(0.0, e_single));
+    out.multiple += intensity * float(std::max(0.0, e_multiple));
+}
+
+IrradianceParts BakeEstimator::estimate(const vec3& p, const vec3& n, const vec3& albedo,
+                                        CounterRng& rng, BakeCounters& counters) const {
+    IrradianceParts parts = method_ == BakeMethod::Vpt
+                                ? volume_path(p, n, rng, counters)
+                                : surface_path(p, n, albedo, 0, rng, counters);
+    if (!finite(parts.surface) || !finite(parts.single) || !finite(parts.multiple)) {
+        ++counters.guarded;
+        return {};
+    }
+    return parts;
+}
+
+IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const vec3& albedo,
+                                            int depth, CounterRng& rng,
+                                            BakeCounters& counters) const {
+    IrradianceParts parts;
+    const bool attenuate = method_ != BakeMethod::Surface && !media_.empty();
+    const bool scatter = method_ == BakeMethod::Impulse && !media_.empty();
+    const float albedo_lum = luminance(albedo);
+    std::vector<EmitterSample> local;
+    sample_emitters(p, rng, local);
+    for (const EmitterSample& s : local) {
+        const float cos_x = glm::dot(n, s.dir);
+        // Below the horizon the receiver's own surface blocks the emitter (and its scattered
+        // light, which the tables would otherwise bring in from the upper hemisphere).
+        if (cos_x <= 0.0f && !scatter) continue;
+        if (!visible(p, n, s.dir, s.distance, counters)) continue;
+        SegmentOptics optics;
+        if (attenuate) {
+            const double length =
+                std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
+            optics = media_.integrate(p, s.dir, length);
+        }
+        if (cos_x > 0.0f) parts.surface += s.irradiance * cos_x * float(optics.transmittance());
+        if (scatter) {
+            const double distance = std::isfinite(s.distance) ? s.distance : optics.length;
+            add_scattered(s.kind, s.intensity, s.dir, distance, s.shift, s.emitter_normal, optics,
+                          n, albedo_lum, parts, counters);
+        }
+    }
+    if (depth >= settings_.bounces) return parts;
+    // One indirect segment, cosine-sampled: irradiance = pi x radiance on average.
+    const float u1 = rng.next_float(), u2 = rng.next_float();
+    const vec3 local_dir = sample_cosine_hemisphere(u1, u2);
+    if (local_dir.z <= 1e-6f) return parts;
+    const vec3 dir = Frame(n).to_world(local_dir);
+    ++counters.rays;
+    const SurfaceHit hit = scene_.intersect(Ray{origin(p, n), dir, 0.0f, INFINITY});
+    if (!hit.valid) return parts;  // environment light arrives by NEE only
+    const Material& material = scene_.scene().materials[size_t(hit.material)];
+    if (material.type == BrdfType::Mirror) return parts;
+    const vec3 albedo_y = material.albedo.eval(hit.uv);
+    if (glm::all(glm::equal(albedo_y, vec3(0.0f)))) return parts;
+    const IrradianceParts sub =
+        surface_path(hit.position, hit.shading_normal, albedo_y, depth + 1, rng, counters);
+    const vec3 radiance = albedo_y * kInvPi * sub.total();  // L(y -> p), diffuse
+    SegmentOptics optics;
+    if (attenuate) optics = media_.integrate(p, dir, hit.distance);
+    parts.surface += kPi * radiance * float(optics.transmittance());
+    if (scatter) {
+        // y as a differential-area emitter of intensity L dA cos_y max(n_y . u, 0) / cos_y: with
+        // dA = d^2 domega / cos_y and domega = 1 / pdf, I0 = L d^2 / (cos_y pdf).
+        const float cos_y = std::max(1e-3f, std::abs(glm::dot(hit.shading_normal, dir)));
+        const float pdf = local_dir.z * kInvPi;
+        const double d = hit.distance;
+        const vec3 intensity = radiance * float(d * d / (double(cos_y) * pdf));
+        add_scattered(EmitterKind::Area, intensity, dir, d,
+                      std::sqrt(std::max(0.0f, 1.0f - cos_y * cos_y)), hit.shading_normal, optics,
+                      n, albedo_lum, parts, counters);
+    }
+    return parts;
+}
+
+IrradianceParts BakeEstimator::volume_path(const vec3& p, const vec3& n, CounterRng& rng,
+                                           BakeCounters& counters) const {
+    IrradianceParts parts;
+    std::vector<EmitterSample> emitters;
+    // Direct light at the receiver, attenuated exactly.
+    sample_emitters(p, rng, emitters);
+    for (const EmitterSample& s : emitters) {
+        const float cos_x = glm::dot(n, s.dir);
+        if (cos_x <= 0.0f || !visible(p, n, s.dir, s.distance, counters)) continue;
+        const double length =
+            std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
+        parts.surface += s.irradiance * cos_x * float(media_.transmittance(p, s.dir, length));
+    }
+    // The walk: a cosine-sampled direction (irradiance = pi x radiance), free flights,
+    // scattering in media, diffuse bounces on surfaces.
+    const float u1 = rng.next_float(), u2 = rng.next_float();
+    const vec3 local_dir = sample_cosine_hemisphere(u1, u2);
+    if (local_dir.z <= 1e-6f) return parts;
+    vec3 dir = Frame(n).to_world(local_dir);
+    vec3 pos = origin(p, n);
+    vec3 throughput(kPi);
+    int chain = 0;      // scattering events since the last surface vertex
+    int category = -1;  // fixed at the first surface vertex: 0 surface, 1 single, 2 multiple
+    int surface_vertices = 0, events = 0;
+    auto add = [&](int cat, const vec3& v) {
+        (cat == 0 ? parts.surface : cat == 1 ? parts.single : parts.multiple) += v;
+    };
+    while (events < 1024) {
+        ++counters.rays;
+        const SurfaceHit hit = scene_.intersect(Ray{pos, dir, 0.0f, INFINITY});
+        const double t_max = hit.valid ? double(hit.distance) : kInfinity;
+        const MediumCollision c =
+            media_.empty() ? MediumCollision{} : media_.sample_collision(pos, dir, t_max, rng);
+        if (c.happened) {
+            if (chain >= settings_.media_bounces) break;  // the walk ends in the medium
+            ++chain;
+            ++events;
+            const vec3 x = pos + dir * float(c.t);
+            throughput *= float(c.sigma_s / c.sigma_t);
+            const int cat = category >= 0 ? category : (chain == 1 ? 1 : 2);
+            sample_emitters(x, rng, emitters);
+            for (const EmitterSample& s : emitters) {
+                // Light travels along -s.dir, then along -dir after scattering at x.
+                const float phase = float(hg_phase(c.g, glm::dot(s.dir, dir)));
+                ++counters.rays;
+                Ray shadow{
+                    x, s.dir, 0.0f,
+                    std::isfinite(s.distance) ? float(s.distance) * (1.0f - 1e-4f) : INFINITY};
+                if (scene_.occluded(shadow)) continue;
+                const double length =
+                    std::isfinite(s.distance) ? s.distance : media_.exit_distance(x, s.dir);
+                add(cat, throughput * s.irradiance * phase *
+                             float(media_.transmittance(x, s.dir, length)));
+            }
+            dir = sample_hg(float(c.g), dir, rng.next_float(), rng.next_float());
+            pos = x;
+            if (events >= 4) {
+                const float survive = std::min(
+                    1.0f, std::max(throughput.x, std::max(throughput.y, throughput.z)) / kPi);
+                if (rng.next_float() >= survive) break;
+                throughput /= survive;
+            }
+            continue;
+        }
+        if (!hit.valid) break;
+        if (category < 0) category = chain == 0 ? 0 : (chain == 1 ? 1 : 2);
+        if (++surface_vertices > settings_.bounces) break;
+        const Material& material = scene_.scene().materials[size_t(hit.material)];
+        if (material.type == BrdfType::Mirror) break;
+        const vec3 albedo_y = material.albedo.eval(hit.uv);
+        if (glm::all(glm::equal(albedo_y, vec3(0.0f)))) break;
+        const vec3 ny = hit.shading_normal;
+        // Radiance leaving y towards the walk: albedo / pi x irradiance at y (NEE part here).
+        sample_emitters(hit.position, rng, emitters);
+        for (const EmitterSample& s : emitters) {
+            const float cos_y = glm::dot(ny, s.dir);
+            if (cos_y <= 0.0f || !visible(hit.position, ny, s.dir, s.distance, counters)) continue;
+            const double length =
+                std::isfinite(s.distance) ? s.distance : media_.exit_distance(hit.position, s.dir);
+            add(category, throughput * albedo_y * kInvPi * s.irradiance * cos_y *
+                              float(media_.transmittance(hit.position, s.dir, length)));
+        }
+        // Continue: cosine sampling at y makes the throughput factor the albedo.
+        throughput *= albedo_y;
+        chain = 0;
+        const vec3 ld = sample_cosine_hemisphere(rng.next_float(), rng.next_float());
+        if (ld.z <= 1e-6f) break;
+        dir = Frame(ny).to_world(ld);
+        pos = origin(hit.position, ny);
+    }
+    return parts;
+}
+
+}  // namespace freqlab

@@ -1,0 +1,88 @@
+// The per-point estimators of method B's bakers (seed, Deuxième article §5, §5.1, §5.2; issue
+// "Method B, part 2"): irradiance at a surface point, split by what carried it.
+//
+// | method     | each path segment x -> y (y an emitter or a surface vertex)                |
+// |------------|-----------------------------------------------------------------------------|
+// | surface    | L(y) as if the media were not there (the baseline)                          |
+// | extinction | L(y) x transmittance of the segment (seed Fig. 30 a/c)                      |
+// | impulse    | extinction, plus L(y)'s scattered ZH response queried with the segment's     |
+// |            | effective sigma_s, sigma_a, g (§4.4) and the emitter kind of y: point and    |
+// |            | directional tables for those lights, the differential-area table for quad  |
+// |            | lights and for surface vertices (§5); only on unoccluded segments (§5.2);  |
+// |            | ZH -> irradiance by the O(N) double product with the clamped cosine (App. 8) |
+// | vpt        | volumetric path tracing of the same quantity: exact free flights and exact  |
+// |            | transmittance through the piecewise-constant media, NEE at every vertex,   |
+// |            | HG phase sampling, Russian roulette after 4 scattering events               |
+//
+// Parts: `surface` is light that reached x along a final segment without scattering in it;
+// `single` / `multiple` had one / several scattering events between x and the previous surface
+// vertex (or emitter). Environment and sky light is reached by NEE only (escaping rays add
+// nothing), so no light is counted twice. Surfaces are seen as diffuse with their albedo
+// texture (a lightmap stores view-independent light); mirrors reflect nothing here.
+#pragma once
+
+#include "accel/ray_scene.h"
+#include "math/rng.h"
+#include "settings/bake_settings.h"
+#include "volume/impulse_query.h"
+#include "volume/media.h"
+
+namespace freqlab {
+
+enum class BakeMethod { Surface, Extinction, Impulse, Vpt };
+const char* to_string(BakeMethod m);
+BakeMethod parse_bake_method(const std::string& text);  // throws Error naming --method
+
+struct IrradianceParts {
+    vec3 surface{0.0f}, single{0.0f}, multiple{0.0f};
+    vec3 total() const { return surface + single + multiple; }
+    IrradianceParts& operator+=(const IrradianceParts& o) {
+        surface += o.surface;
+        single += o.single;
+        multiple += o.multiple;
+        return *this;
+    }
+};
+
+struct BakeCounters {
+    long rays = 0;             // intersection + occlusion rays
+    long impulse_queries = 0;  // table lookups
+    long guarded = 0;          // non-finite estimates dropped
+};
+
+class BakeEstimator {
+  public:
+    // `tables` is needed by Impulse only (may be null otherwise).
+    BakeEstimator(const RayScene& scene, const Media& media, const ImpulseTables* tables,
+                  BakeMethod method, const BakeSettings& settings);
+    // Irradiance at p (normal n, albedo of the receiver for back-scatter): one path.
+    IrradianceParts estimate(const vec3& p, const vec3& n, const vec3& albedo, CounterRng& rng,
+                             BakeCounters& counters) const;
+
+  private:
+    struct EmitterSample;
+    void sample_emitters(const vec3& p, CounterRng& rng, std::vector<EmitterSample>& out) const;
+    IrradianceParts surface_path(const vec3& p, const vec3& n, const vec3& albedo, int depth,
+                                 CounterRng& rng, BakeCounters& counters) const;
+    IrradianceParts volume_path(const vec3& p, const vec3& n, CounterRng& rng,
+                                BakeCounters& counters) const;
+    // Scattered irradiance at (p, n) from an emitter of strength `intensity` seen along `dir`
+    // at `distance` (the table's normalisation), through the segment's effective medium.
+    void add_scattered(EmitterKind kind, const vec3& intensity, const vec3& dir, double distance,
+                       double shift, const vec3& emitter_normal, const SegmentOptics& optics,
+                       const vec3& n, float albedo_lum, IrradianceParts& out,
+                       BakeCounters& counters) const;
+    bool visible(const vec3& from, const vec3& n, const vec3& dir, double distance,
+                 BakeCounters& counters) const;
+    vec3 origin(const vec3& p, const vec3& n) const;
+
+    const RayScene& scene_;
+    const Media& media_;
+    const ImpulseTables* tables_;
+    BakeMethod method_;
+    BakeSettings settings_;
+    int table_bounces_ = 1;
+    double cosine_zh_[kImpulseOrder];
+};
+
+}  // namespace freqlab

@@ -1,0 +1,268 @@
+#include "volume/lightmap_atlas.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include <tbb/parallel_for.h>
+
+#include "math/rng.h"
+#include "math/sampling.h"
+
+namespace freqlab {
+
+size_t ObjectLightmap::count(TexelState s) const {
+    return size_t(std::count_if(texels.begin(), texels.end(),
+                                [s](const LightmapTexel& t) { return t.state == s; }));
+}
+
+std::vector<std::string> texel_state_legend() {
+    return {"empty", "valid", "inside geometry", "dilated"};
+}
+
+namespace {
+
+struct Chart {
+    std::vector<int> triangles;
+    int axis = 2;                    // projection drops this world axis
+    vec2 lo{1e30f}, hi{-1e30f};      // projected bounds (scene units)
+    int x = 0, y = 0, w = 0, h = 0;  // placement in texels, gutter included
+};
+
+int find_root(std::vector<int>& parent, int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+}
+
+vec2 project(const vec3& p, int axis) {
+    return axis == 0 ? vec2(p.y, p.z) : axis == 1 ? vec2(p.x, p.z) : vec2(p.x, p.y);
+}
+
+// Charts of one mesh: (dominant axis with sign) x connected components by shared vertex.
+std::vector<Chart> make_charts(const TriangleMesh& mesh, const std::vector<vec3>& world) {
+    const size_t nt = mesh.triangles.size();
+    std::vector<int> cls(nt);
+    for (size_t t = 0; t < nt; ++t) {
+        const uvec3 tri = mesh.triangles[t];
+        const vec3 n = glm::cross(world[tri.y] - world[tri.x], world[tri.z] - world[tri.x]);
+        const vec3 a = glm::abs(n);
+        const int axis = a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
+        cls[t] = axis * 2 + (n[axis] < 0.0f ? 1 : 0);
+    }
+    // Union triangles of one class sharing a vertex (through a per-vertex, per-class owner).
+    std::vector<int> parent(nt);
+    std::iota(parent.begin(), parent.end(), 0);
+    std::vector<int> owner(mesh.positions.size() * 6, -1);
+    for (size_t t = 0; t < nt; ++t)
+        for (int k = 0; k < 3; ++k) {
+            int& o = owner[size_t(mesh.triangles[t][k]) * 6 + cls[t]];
+            if (o < 0)
+                o = int(t);
+            else
+                parent[find_root(parent, int(t))] = find_root(parent, o);
+        }
+    std::vector<int> chart_of(nt, -1);
+    std::vector<Chart> charts;
+    for (size_t t = 0; t < nt; ++t) {
+        const int r = find_root(parent, int(t));
+        if (chart_of[r] < 0) {
+            chart_of[r] = int(charts.size());
+            charts.push_back({});
+            charts.back().axis = cls[t] / 2;
+        }
+        Chart& c = charts[chart_of[r]];
+        c.triangles.push_back(int(t));
+        for (int k = 0; k < 3; ++k) {
+            const vec2 p = project(world[mesh.triangles[t][k]], c.axis);
+            c.lo = glm::min(c.lo, p);
+            c.hi = glm::max(c.hi, p);
+        }
+    }
+    return charts;
+}
+
+// Shelf packing, tallest first; returns the atlas size (width, height) or (0, 0) when a side
+// would exceed max_size.
+ivec2 pack(std::vector<Chart>& charts, float density, int padding, int max_size) {
+    double area = 0.0;
+    for (Chart& c : charts) {
+        c.w = int(std::ceil((c.hi.x - c.lo.x) * density)) + 1 + 2 * padding;
+        c.h = int(std::ceil((c.hi.y - c.lo.y) * density)) + 1 + 2 * padding;
+        area += double(c.w) * c.h;
+    }
+    int width = 16;
+    while (double(width) * width < 1.3 * area) width *= 2;
+    for (const Chart& c : charts) width = std::max(width, c.w);
+    if (width > max_size) return {0, 0};
+    std::vector<int> order(charts.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int a, int b) { return charts[a].h > charts[b].h; });
+    int x = 0, y = 0, shelf = 0;
+    for (int i : order) {
+        Chart& c = charts[i];
+        if (x + c.w > width) {
+            x = 0;
+            y += shelf;
+            shelf = 0;
+        }
+        c.x = x;
+        c.y = y;
+        x += c.w;
+        shelf = std::max(shelf, c.h);
+    }
+    const int height = y + shelf;
+    if (height > max_size) return {0, 0};
+    return {width, height};
+}
+
+bool wants_lightmap(const Scene& scene, const SceneObject& o) {
+    if (o.shape != ShapeKind::Mesh || !o.mesh || !o.animation.is_static()) return false;
+    return scene.materials[o.material].type != BrdfType::Mirror;
+}
+
+// Fraction of rays from p over the sphere that hit a back face (the inside of a closed mesh).
+float backface_fraction(const RayScene& rs, const vec3& p, const vec3& n, int rays, uint64_t key) {
+    int back = 0, hits = 0;
+    for (int i = 0; i < rays; ++i) {
+        CounterRng rng(key, 0x7e57, 0, uint64_t(i));
+        const float u1 = rng.next_float(), u2 = rng.next_float();
+        const vec3 d = sample_uniform_sphere(u1, u2);
+        Ray ray{p + n * 1e-4f * (1.0f + glm::length(p)), d, 0.0f, INFINITY};
+        const SurfaceHit h = rs.intersect(ray);
+        if (!h.valid) continue;
+        ++hits;
+        // Back face: the triangle's own (wound) normal points away from the ray origin.
+        const SceneObject& o = rs.scene().objects[h.object];
+        if (o.shape != ShapeKind::Mesh) continue;
+        const uvec3 tri = o.mesh->triangles[h.primitive];
+        const mat4& m = rs.object_to_world(h.object);
+        const vec3 a = vec3(m * vec4(o.mesh->positions[tri.x], 1.0f));
+        const vec3 b = vec3(m * vec4(o.mesh->positions[tri.y], 1.0f));
+        const vec3 c = vec3(m * vec4(o.mesh->positions[tri.z], 1.0f));
+        if (glm::dot(glm::cross(b - a, c - a), d) > 0.0f) ++back;
+    }
+    (void)hits;
+    return float(back) / float(rays);
+}
+
+}  // namespace
+
+std::vector<ObjectLightmap> build_lightmaps(const RayScene& rs, const AtlasSettings& settings) {
+    const Scene& scene = rs.scene();
+    std::vector<ObjectLightmap> maps;
+    for (size_t oi = 0; oi < scene.objects.size(); ++oi) {
+        const SceneObject& obj = scene.objects[oi];
+        if (!wants_lightmap(scene, obj)) continue;
+        const TriangleMesh& mesh = *obj.mesh;
+        const mat4& m = rs.object_to_world(int(oi));
+        const mat3 nm = glm::transpose(glm::inverse(mat3(m)));
+        std::vector<vec3> world(mesh.positions.size());
+        for (size_t v = 0; v < world.size(); ++v)
+            world[v] = vec3(m * vec4(mesh.positions[v], 1.0f));
+        std::vector<Chart> charts = make_charts(mesh, world);
+        float density = settings.texel_density;
+        ivec2 size = pack(charts, density, settings.padding, settings.max_size);
+        while (size.x == 0 && density > 1e-3f) {
+            density *= 0.8f;
+            size = pack(charts, density, settings.padding, settings.max_size);
+        }
+        if (size.x == 0) continue;
+        ObjectLightmap map;
+        map.object = int(oi);
+        map.width = size.x;
+        map.height = size.y;
+        map.charts = int(charts.size());
+        map.texel_density = density;
+        map.texels.resize(size_t(size.x) * size.y);
+        const Material& material = scene.materials[obj.material];
+        tbb::parallel_for(size_t(0), charts.size(), [&](size_t ci) {
+            const Chart& c = charts[ci];
+            for (int t : c.triangles) {
+                const uvec3 tri = mesh.triangles[size_t(t)];
+                vec2 q[3];
+                for (int k = 0; k < 3; ++k)
+                    q[k] = (project(world[tri[k]], c.axis) - c.lo) * density +
+                           vec2(float(settings.padding) + 0.5f);
+                const vec2 lo = glm::min(q[0], glm::min(q[1], q[2]));
+                const vec2 hi = glm::max(q[0], glm::max(q[1], q[2]));
+                const float area =
+                    (q[1].x - q[0].x) * (q[2].y - q[0].y) - (q[2].x - q[0].x) * (q[1].y - q[0].y);
+                if (std::abs(area) < 1e-12f) continue;
+                for (int y = std::max(0, int(std::floor(lo.y))); y <= int(hi.y) && y < c.h; ++y)
+                    for (int x = std::max(0, int(std::floor(lo.x))); x <= int(hi.x) && x < c.w;
+                         ++x) {
+                        const vec2 pc(x + 0.5f, y + 0.5f);
+                        auto edge = [&](vec2 a, vec2 b) {
+                            return ((b.x - a.x) * (pc.y - a.y) - (pc.x - a.x) * (b.y - a.y)) / area;
+                        };
+                        const float w0 = edge(q[1], q[2]), w1 = edge(q[2], q[0]),
+                                    w2 = edge(q[0], q[1]);
+                        if (w0 < -1e-6f || w1 < -1e-6f || w2 < -1e-6f) continue;
+                        LightmapTexel& tx = map.texels[size_t(c.y + y) * size.x + size_t(c.x + x)];
+                        if (tx.triangle >= 0) continue;  // a fold: the first triangle keeps it
+                        tx.triangle = t;
+                        tx.state = TexelState::Valid;
+                        tx.position = w0 * world[tri.x] + w1 * world[tri.y] + w2 * world[tri.z];
+                        vec3 n =
+                            glm::cross(world[tri.y] - world[tri.x], world[tri.z] - world[tri.x]);
+                        if (!mesh.normals.empty()) {
+                            const vec3 sn =
+                                nm * (w0 * mesh.normals[tri.x] + w1 * mesh.normals[tri.y] +
+                                      w2 * mesh.normals[tri.z]);
+                            if (glm::dot(sn, n) > 0.0f) n = sn;
+                        }
+                        tx.normal = glm::normalize(n);
+                        const vec2 uv = mesh.uvs.empty()
+                                            ? vec2(0.0f)
+                                            : w0 * mesh.uvs[tri.x] + w1 * mesh.uvs[tri.y] +
+                                                  w2 * mesh.uvs[tri.z];
+                        tx.albedo = material.albedo.eval(uv);
+                    }
+            }
+        });
+        // Validity: texels inside closed geometry see mostly back faces.
+        tbb::parallel_for(size_t(0), map.texels.size(), [&](size_t i) {
+            LightmapTexel& tx = map.texels[i];
+            if (tx.state != TexelState::Valid) return;
+            const float f = backface_fraction(rs, tx.position, tx.normal, settings.validity_rays,
+                                              mix64(oi * 0x100000000ULL + i));
+            if (f > settings.backface_tolerance) tx.state = TexelState::InsideGeometry;
+        });
+        maps.push_back(std::move(map));
+    }
+    return maps;
+}
+
+std::vector<TexelState> dilate(const ObjectLightmap& map, std::vector<float>& values, int channels,
+                               int rings) {
+    std::vector<TexelState> state(map.texels.size());
+    for (size_t i = 0; i < state.size(); ++i) state[i] = map.texels[i].state;
+    const int w = map.width, h = map.height;
+    for (int ring = 0; ring < rings; ++ring) {
+        std::vector<TexelState> next = state;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const size_t i = size_t(y) * w + x;
+                if (state[i] == TexelState::Valid || state[i] == TexelState::Dilated) continue;
+                int n = 0;
+                std::vector<float> sum(size_t(channels), 0.0f);
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        const int xx = x + dx, yy = y + dy;
+                        if (xx < 0 || yy < 0 || xx >= w || yy >= h) continue;
+                        const size_t j = size_t(yy) * w + xx;
+                        if (state[j] != TexelState::Valid && state[j] != TexelState::Dilated)
+                            continue;
+                        for (int c = 0; c < channels; ++c) sum[c] += values[j * channels + c];
+                        ++n;
+                    }
+                if (n == 0) continue;
+                for (int c = 0; c < channels; ++c) values[i * channels + c] = sum[c] / float(n);
+                next[i] = TexelState::Dilated;
+            }
+        state.swap(next);
+    }
+    return state;
+}
+
+}  // namespace freqlab

@@ -1,0 +1,67 @@
+// Lightmap bake targets (issue "Method B, part 2"; seed, Deuxième article §5, §6): one atlas
+// per static mesh object, its texels placed on the surface and flagged valid or not.
+//
+// Charts are automatic: triangles grouped by the dominant axis of their world normal (six
+// classes) and by shared vertices, each group projected onto its axis plane at
+// `texel_density` texels per scene unit and shelf-packed (tallest first) with a gutter of
+// `padding` texels. A texel whose centre falls inside a triangle is placed at that point;
+// a valid texel whose hemisphere sees more back faces than `backface_tolerance` (a fraction of
+// `validity_rays` rays over the sphere) lies inside geometry and is flagged; after a bake,
+// empty and invalid texels next to valid ones take their neighbours' mean (dilation), so
+// bilinear lookups do not bleed black. Spheres (exact primitives, no mesh), moving objects
+// and perfect mirrors get no lightmap (a mirror's appearance is not view-independent).
+//
+// | parameter          | default | meaning                                             |
+// |--------------------|---------|-----------------------------------------------------|
+// | texel_density      | 16      | texels per scene unit                               |
+// | max_size           | 1024    | an atlas side never exceeds it (density drops)      |
+// | padding            | 2       | gutter texels around each chart                     |
+// | backface_tolerance | 0.3     | fraction of back-face hits that flags a texel       |
+#pragma once
+
+#include <vector>
+
+#include "accel/ray_scene.h"
+
+namespace freqlab {
+
+enum class TexelState : uint8_t { Empty = 0, Valid = 1, InsideGeometry = 2, Dilated = 3 };
+
+struct LightmapTexel {
+    TexelState state = TexelState::Empty;
+    int triangle = -1;
+    vec3 position{0.0f};  // world
+    vec3 normal{0.0f};    // world shading normal, unit
+    vec3 albedo{0.0f};    // the material's albedo texture at the point
+};
+
+struct ObjectLightmap {
+    int object = -1;
+    int width = 0, height = 0;
+    int charts = 0;
+    float texel_density = 0.0f;         // after any reduction to fit max_size
+    std::vector<LightmapTexel> texels;  // row-major from the top row
+    size_t count(TexelState s) const;
+};
+
+struct AtlasSettings {
+    float texel_density = 16.0f;
+    int max_size = 1024;
+    int padding = 2;
+    float backface_tolerance = 0.3f;
+    int validity_rays = 32;
+};
+
+// Objects are placed at time 0. Throws nothing; objects without a lightmap are skipped.
+std::vector<ObjectLightmap> build_lightmaps(const RayScene& scene, const AtlasSettings& settings);
+
+// Fills Empty / InsideGeometry texels that touch a Valid (or already dilated) one with the mean
+// of those neighbours, `rings` times; `values` has `channels` floats per texel. Returns the
+// texel states after dilation (filled texels become Dilated).
+std::vector<TexelState> dilate(const ObjectLightmap& map, std::vector<float>& values, int channels,
+                               int rings);
+
+// The legend of the `texel_valid` layer, in TexelState order.
+std::vector<std::string> texel_state_legend();
+
+}  // namespace freqlab

@@ -1,0 +1,187 @@
+#include "volume/lightmap_baker.h"
+
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+
+#include "base/error.h"
+#include "base/stopwatch.h"
+
+namespace freqlab {
+
+nlohmann::json BakeStats::to_json() const {
+    return {{"stages", {{"atlas_ms", atlas_ms}, {"tables_ms", tables_ms}, {"bake_ms", bake_ms}}},
+            {"rays", rays},
+            {"impulse_queries", impulse_queries},
+            {"nonfinite", guarded},
+            {"texels_total", texels_total},
+            {"texels_valid", texels_valid},
+            {"texels_invalid", texels_invalid},
+            {"spp", samples}};
+}
+
+std::string lightmap_name(const Scene& scene, const ObjectLightmap& map) {
+    const std::string& n = scene.objects[size_t(map.object)].name;
+    return n.empty() ? "object" + std::to_string(map.object) : n;
+}
+
+LightmapBaker::LightmapBaker(const RayScene& scene, const Media& media, const ImpulseTables* tables,
+                             BakeMethod method, const BakeSettings& settings)
+    : scene_(scene),
+      estimator_(scene, media, tables, method, settings),
+      method_(method),
+      settings_(settings) {
+    const auto t0 = Clock::now();
+    AtlasSettings atlas;
+    atlas.texel_density = settings.texel_density;
+    atlas.max_size = settings.max_size;
+    atlas.padding = settings.padding;
+    atlas.backface_tolerance = settings.backface_tolerance;
+    maps_ = build_lightmaps(scene, atlas);
+    stats_.atlas_ms = ms_since(t0);
+    for (const ObjectLightmap& m : maps_) {
+        stats_.texels_total += long(m.texels.size());
+        stats_.texels_valid += long(m.count(TexelState::Valid));
+        stats_.texels_invalid += long(m.count(TexelState::InsideGeometry));
+    }
+    reset();
+}
+
+void LightmapBaker::reset() {
+    sums_.assign(maps_.size(), {});
+    for (size_t i = 0; i < maps_.size(); ++i) sums_[i].assign(maps_[i].texels.size(), {});
+    samples_ = 0;
+    stats_.bake_ms = 0.0;
+    stats_.rays = stats_.impulse_queries = stats_.guarded = 0;
+    stats_.samples = 0;
+}
+
+void LightmapBaker::run_pass(int samples, Progress* progress) {
+    const auto t0 = Clock::now();
+    long rows = 0;
+    for (const ObjectLightmap& m : maps_) rows += m.height;
+    if (progress) progress->begin_stage("bake " + std::string(to_string(method_)), rows);
+    std::atomic<long> rays{0}, queries{0}, guarded{0};
+    const int first = samples_;
+    for (size_t mi = 0; mi < maps_.size(); ++mi) {
+        const ObjectLightmap& map = maps_[mi];
+        tbb::parallel_for(0, map.height, [&](int y) {
+            if (progress) progress->checkpoint();
+            BakeCounters counters;
+            for (int x = 0; x < map.width; ++x) {
+                const size_t i = size_t(y) * map.width + x;
+                const LightmapTexel& t = map.texels[i];
+                if (t.state != TexelState::Valid) continue;
+                // Summed sample by sample into the running total: the same additions in the
+                // same order whatever the split into passes.
+                for (int s = first; s < first + samples; ++s) {
+                    CounterRng rng(uint64_t(settings_.seed), mi, i, uint64_t(s));
+                    sums_[mi][i] +=
+                        estimator_.estimate(t.position, t.normal, t.albedo, rng, counters);
+                }
+            }
+            rays += counters.rays;
+            queries += counters.impulse_queries;
+            guarded += counters.guarded;
+            if (progress) progress->advance();
+        });
+    }
+    samples_ += samples;
+    stats_.samples = samples_;
+    stats_.rays += rays;
+    stats_.impulse_queries += queries;
+    stats_.guarded += guarded;
+    stats_.bake_ms += ms_since(t0);
+}
+
+void LightmapBaker::run(Progress* progress) {
+    int passes = 0;
+    for (int n = 1, done = samples_; done < settings_.spp; n *= 2, ++passes)
+        done += std::min(n, settings_.spp - done);
+    if (progress) progress->set_stage_count(std::max(1, passes));
+    for (int n = 1; samples_ < settings_.spp; n *= 2)
+        run_pass(std::min(n, settings_.spp - samples_), progress);
+}
+
+LayerSet LightmapBaker::layers(size_t mi) const {
+    const ObjectLightmap& map = maps_.at(mi);
+    LayerSet set(map.width, map.height);
+    const size_t n = map.texels.size();
+    const float inv = samples_ > 0 ? 1.0f / float(samples_) : 0.0f;
+    // Outgoing radiance of each part, and irradiance; dilated together.
+    std::vector<float> values(n * 15, 0.0f);
+    for (size_t i = 0; i < n; ++i) {
+        const LightmapTexel& t = map.texels[i];
+        if (t.state != TexelState::Valid) continue;
+        const IrradianceParts& p = sums_[mi][i];
+        const vec3 e = p.total() * inv;
+        const vec3 k = t.albedo * kInvPi * inv;
+        const vec3 out[5] = {k * p.total(), e, p.surface * inv, p.single * inv, p.multiple * inv};
+        for (int l = 0; l < 5; ++l)
+            for (int c = 0; c < 3; ++c) values[i * 15 + size_t(l) * 3 + c] = out[l][c];
+    }
+    const std::vector<TexelState> states = dilate(map, values, 15, settings_.dilation);
+    const char* names[5] = {"lm_total", "lm_irradiance", "lm_surface", "lm_inscatter_single",
+                            "lm_inscatter_multiple"};
+    const char* what[5] = {
+        "outgoing radiance of the lightmap: albedo / pi x all irradiance",
+        "irradiance at the texel (W/m^2), all parts",
+        "irradiance from light that reached the texel without scattering in a medium on its "
+        "last segment (attenuated unless the method is surface)",
+        "irradiance from light scattered once in a medium on its last segment",
+        "irradiance from light scattered two or more times on its last segment"};
+    for (int l = 0; l < 5; ++l) {
+        Layer& layer = set.add(names[l], LayerKind::Color, 3, what[l]);
+        for (size_t i = 0; i < n; ++i)
+            for (int c = 0; c < 3; ++c) layer.data[i * 3 + c] = values[i * 15 + size_t(l) * 3 + c];
+    }
+    Layer& valid = set.add("texel_valid", LayerKind::Categorical, 1,
+                           "texel state: empty, valid, inside geometry (flagged), dilated");
+    valid.legend = texel_state_legend();
+    for (size_t i = 0; i < n; ++i) valid.data[i] = float(int(states[i]));
+    return set;
+}
+
+}  // namespace freqlab
+
+namespace freqlab {
+
+LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref,
+                                const std::string& layer) {
+    if (test.width() != ref.width() || test.height() != ref.height())
+        throw Error("", layer,
+                    "lightmap sizes differ: " + std::to_string(test.width()) + "x" +
+                        std::to_string(test.height()) + " against " + std::to_string(ref.width()) +
+                        "x" + std::to_string(ref.height()));
+    const Layer& a = test.get(layer);
+    const Layer& b = ref.get(layer);
+    const Layer& valid = ref.get("texel_valid");
+    LightmapError e;
+    double mean_ref = 0.0;
+    const int ch = std::min(a.channels, b.channels);
+    for (size_t i = 0; i < ref.pixel_count(); ++i) {
+        if (int(valid.data[i]) != int(TexelState::Valid)) continue;
+        ++e.texels;
+        for (int c = 0; c < ch; ++c) mean_ref += b.data[i * b.channels + c];
+    }
+    if (e.texels == 0) return e;
+    mean_ref /= double(e.texels) * ch;
+    const double eps2 = 1e-6 * mean_ref * mean_ref + 1e-30;
+    double rel = 0.0, sq = 0.0, ref2 = 0.0;
+    for (size_t i = 0; i < ref.pixel_count(); ++i) {
+        if (int(valid.data[i]) != int(TexelState::Valid)) continue;
+        for (int c = 0; c < ch; ++c) {
+            const double r = b.data[i * b.channels + c], t = a.data[i * a.channels + c];
+            rel += (t - r) * (t - r) / (r * r + eps2);
+            sq += (t - r) * (t - r);
+            ref2 += r * r;
+        }
+    }
+    const double n = double(e.texels) * ch;
+    e.relmse = rel / n;
+    e.rmse = std::sqrt(sq / n);
+    e.rel_l2 = ref2 > 0.0 ? std::sqrt(sq / ref2) : 0.0;
+    return e;
+}
+
+}  // namespace freqlab

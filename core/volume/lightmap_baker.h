@@ -1,0 +1,83 @@
+// Method B's lightmap bake as a progressive, deterministic, cancellable job (issue "Method B,
+// part 2"; DESIGN.md "Method B: one bake"). Texels are laid out once (volume/lightmap_atlas.h);
+// each pass adds paths per texel to running sums, so a preview appears after the first pass and
+// refines. Random numbers are keyed by (seed, lightmap, texel, sample): a bake is identical for
+// any thread count and any split into passes.
+//
+// Layers per lightmap (atlas resolution): lm_total (the lightmap: outgoing radiance,
+// albedo / pi x E), lm_irradiance (E), and E split by what carried it: lm_surface,
+// lm_inscatter_single, lm_inscatter_multiple (irradiance, so that a black receiver still shows
+// them; they sum to lm_irradiance), texel_valid (categorical).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "base/job.h"
+#include "image/layers.h"
+#include "volume/bake_estimators.h"
+#include "volume/lightmap_atlas.h"
+
+namespace freqlab {
+
+struct BakeStats {
+    double atlas_ms = 0.0, tables_ms = 0.0, bake_ms = 0.0;
+    long rays = 0, impulse_queries = 0, guarded = 0;
+    long texels_valid = 0, texels_invalid = 0, texels_total = 0;
+    int samples = 0;
+    nlohmann::json to_json() const;
+};
+
+class LightmapBaker {
+  public:
+    // Builds the atlases now; `tables` is needed for BakeMethod::Impulse when media exist.
+    LightmapBaker(const RayScene& scene, const Media& media, const ImpulseTables* tables,
+                  BakeMethod method, const BakeSettings& settings);
+
+    // Adds `samples` paths to every valid texel (progress: one unit per row of texels).
+    void run_pass(int samples, Progress* progress = nullptr);
+    // Passes until settings.spp samples (first pass: 1 sample, then doubling).
+    void run(Progress* progress = nullptr);
+    // Forget the sums (after a media change); the atlas stays.
+    void reset();
+
+    int samples() const { return samples_; }
+    const std::vector<ObjectLightmap>& lightmaps() const { return maps_; }
+    LayerSet layers(size_t lightmap) const;
+    const BakeStats& stats() const { return stats_; }
+    BakeMethod method() const { return method_; }
+
+  private:
+    const RayScene& scene_;
+    BakeEstimator estimator_;
+    BakeMethod method_;
+    BakeSettings settings_;
+    std::vector<ObjectLightmap> maps_;
+    // Per lightmap, per texel: surface, single, multiple (RGB each) summed over samples.
+    std::vector<std::vector<IrradianceParts>> sums_;
+    int samples_ = 0;
+    BakeStats stats_;
+};
+
+// The scene's lightmap name for file output: "<object name>" or "object<i>".
+std::string lightmap_name(const Scene& scene, const ObjectLightmap& map);
+
+}  // namespace freqlab
+
+namespace freqlab {
+
+// Error of a lightmap layer against a reference bake of the same scene and atlas, over the
+// reference's valid texels only (gutters and flagged texels would dilute it):
+// relmse = mean over texels and channels of (I - R)^2 / (R^2 + e^2), e = 1e-3 x mean(R), so
+// the measure does not depend on the light's units; rmse likewise; rel_l2 = |I - R| / |R|.
+struct LightmapError {
+    double relmse = 0.0, rmse = 0.0, rel_l2 = 0.0;
+    long texels = 0;
+};
+// Throws Error when sizes differ or a layer is missing.
+LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref,
+                                const std::string& layer);
+
+}  // namespace freqlab

@@ -1,0 +1,269 @@
+#include "volume/media.h"
+
+#include <tbb/parallel_for.h>
+
+#include "base/error.h"
+#include "volume/vdb_reader.h"
+
+namespace freqlab {
+
+bool clip_to_box(const vec3& bmin, const vec3& bmax, const vec3& o, const vec3& d, double* t0,
+                 double* t1) {
+    double lo = *t0, hi = *t1;
+    for (int a = 0; a < 3; ++a) {
+        if (d[a] == 0.0f) {
+            if (o[a] < bmin[a] || o[a] > bmax[a]) return false;
+            continue;
+        }
+        const double inv = 1.0 / d[a];
+        double ta = (bmin[a] - o[a]) * inv, tb = (bmax[a] - o[a]) * inv;
+        if (ta > tb) std::swap(ta, tb);
+        lo = std::max(lo, ta);
+        hi = std::min(hi, tb);
+        if (lo > hi) return false;
+    }
+    *t0 = lo;
+    *t1 = hi;
+    return hi > lo;
+}
+
+DensityGrid::DensityGrid(vec3 box_min, vec3 box_max, ivec3 resolution, std::vector<float> voxels)
+    : min_(box_min), max_corner_(box_max), res_(resolution), voxels_(std::move(voxels)) {
+    voxel_ = (box_max - box_min) / vec3(resolution);
+    for (float v : voxels_) max_ = std::max(max_, v);
+}
+
+float DensityGrid::at(const vec3& p) const {
+    const vec3 rel = (p - min_) / voxel_;
+    if (rel.x < 0 || rel.y < 0 || rel.z < 0 || rel.x >= res_.x || rel.y >= res_.y ||
+        rel.z >= res_.z)
+        return 0.0f;
+    const ivec3 c = glm::min(ivec3(rel), res_ - 1);
+    return voxels_[(size_t(c.z) * res_.y + c.y) * res_.x + c.x];
+}
+
+HomogeneousMedium SegmentOptics::effective() const {
+    if (length <= 0.0) return {0.0, 0.0, 0.0};
+    return {tau_s / length, tau_a / length, tau_s > 0.0 ? tau_gs / tau_s : 0.0};
+}
+
+namespace {
+
+// Value noise on an integer lattice (hash of the corner), smoothstep-interpolated.
+double lattice(uint32_t seed, int x, int y, int z) {
+    const uint64_t h =
+        mix64(uint64_t(seed) * 0x9E3779B97F4A7C15ULL ^ (uint64_t(uint32_t(x)) << 42) ^
+              (uint64_t(uint32_t(y)) << 21) ^ uint64_t(uint32_t(z)));
+    return double(h >> 11) * 0x1p-53;
+}
+
+double value_noise(uint32_t seed, const glm::dvec3& p) {
+    const glm::dvec3 f = glm::floor(p);
+    const glm::dvec3 t = p - f;
+    const glm::dvec3 s = t * t * (3.0 - 2.0 * t);
+    const int x = int(f.x), y = int(f.y), z = int(f.z);
+    double c[2][2][2];
+    for (int i = 0; i < 2; ++i)
+        for (int j = 0; j < 2; ++j)
+            for (int k = 0; k < 2; ++k) c[i][j][k] = lattice(seed, x + i, y + j, z + k);
+    auto lerp = [](double a, double b, double w) { return a + (b - a) * w; };
+    return lerp(lerp(lerp(c[0][0][0], c[1][0][0], s.x), lerp(c[0][1][0], c[1][1][0], s.x), s.y),
+                lerp(lerp(c[0][0][1], c[1][0][1], s.x), lerp(c[0][1][1], c[1][1][1], s.x), s.y),
+                s.z);
+}
+
+// fBm normalised to [0, 1].
+double fbm(const MediumDesc& m, const glm::dvec3& p) {
+    double sum = 0.0, amplitude = 1.0, norm = 0.0, freq = m.frequency;
+    for (int o = 0; o < m.octaves; ++o) {
+        sum += amplitude * value_noise(m.seed + uint32_t(o) * 7919u, p * freq);
+        norm += amplitude;
+        amplitude *= 0.5;
+        freq *= 2.0;
+    }
+    return sum / norm;
+}
+
+double procedural_density(const MediumDesc& m, const vec3& p) {
+    switch (m.density) {
+        case DensitySource::Noise: {
+            const double n = fbm(m, glm::dvec3(p));
+            return std::max(0.0, n - m.threshold) / (1.0 - m.threshold);
+        }
+        case DensitySource::HeightFog:
+            return p.z <= m.base ? 1.0 : std::exp(-(p.z - m.base) / m.falloff);
+        case DensitySource::Brushes: {
+            double d = 0.0;
+            for (const DensityBrush& b : m.brushes) {
+                const vec3 q = (p - b.center) / b.half_size;
+                const bool inside = b.shape == DensityBrush::Shape::Box
+                                        ? glm::all(glm::lessThanEqual(glm::abs(q), vec3(1.0f)))
+                                        : glm::dot(q, q) <= 1.0f;
+                if (inside) d += b.density;
+            }
+            return d;
+        }
+        default:
+            return 1.0;
+    }
+}
+
+std::shared_ptr<const DensityGrid> sample_grid(const MediumDesc& m) {
+    const ivec3 res = m.resolution;
+    std::vector<float> voxels(size_t(res.x) * res.y * res.z);
+    const vec3 size = (m.box_max - m.box_min) / vec3(res);
+    tbb::parallel_for(0, res.z, [&](int z) {
+        for (int y = 0; y < res.y; ++y)
+            for (int x = 0; x < res.x; ++x) {
+                const vec3 p = m.box_min + (vec3(x, y, z) + 0.5f) * size;
+                voxels[(size_t(z) * res.y + y) * res.x + x] = float(procedural_density(m, p));
+            }
+    });
+    return std::make_shared<DensityGrid>(m.box_min, m.box_max, res, std::move(voxels));
+}
+
+}  // namespace
+
+Media::Media(const std::vector<MediumDesc>& descs, const std::string& scene_file) {
+    for (size_t i = 0; i < descs.size(); ++i) {
+        Entry e{descs[i], nullptr};
+        if (e.desc.density == DensitySource::Vdb) {
+            const std::string field = "media[" + std::to_string(i) + "].density";
+            VdbDensity vdb = read_vdb_density(e.desc.vdb_file, e.desc.vdb_grid, scene_file, field);
+            e.desc.bounds = MediumBounds::Box;
+            e.desc.box_min = vdb.box_min;
+            e.desc.box_max = vdb.box_max;
+            e.desc.resolution = vdb.resolution;
+            e.grid = std::make_shared<DensityGrid>(vdb.box_min, vdb.box_max, vdb.resolution,
+                                                   std::move(vdb.voxels));
+        } else if (e.desc.is_grid()) {
+            e.grid = sample_grid(e.desc);
+        }
+        media_.push_back(std::move(e));
+    }
+}
+
+void Media::set_coefficients(size_t i, double sigma_s, double sigma_a, double g, double scale) {
+    MediumDesc& d = media_.at(i).desc;
+    d.sigma_s = sigma_s;
+    d.sigma_a = sigma_a;
+    d.g = g;
+    d.density_scale = scale;
+}
+
+bool Media::clip(const Entry& e, const vec3& o, const vec3& d, double t_max, double* t0,
+                 double* t1) const {
+    *t0 = 0.0;
+    *t1 = t_max;
+    switch (e.desc.bounds) {
+        case MediumBounds::Everywhere:
+            return t_max > 0.0;
+        case MediumBounds::Box:
+            return clip_to_box(e.desc.box_min, e.desc.box_max, o, d, t0, t1);
+        case MediumBounds::Sphere: {
+            const glm::dvec3 oc = glm::dvec3(o) - glm::dvec3(e.desc.center);
+            const double b = glm::dot(oc, glm::dvec3(d));
+            const double c = glm::dot(oc, oc) - double(e.desc.radius) * e.desc.radius;
+            const double disc = b * b - c;
+            if (disc <= 0.0) return false;
+            const double s = std::sqrt(disc);
+            *t0 = std::max(0.0, -b - s);
+            *t1 = std::min(t_max, -b + s);
+            return *t1 > *t0;
+        }
+    }
+    return false;
+}
+
+HomogeneousMedium Media::at(const vec3& p) const {
+    HomogeneousMedium sum{0.0, 0.0, 0.0};
+    double gs = 0.0;
+    for (const Entry& e : media_) {
+        bool inside = true;
+        if (e.desc.bounds == MediumBounds::Box)
+            inside = glm::all(glm::greaterThanEqual(p, e.desc.box_min)) &&
+                     glm::all(glm::lessThanEqual(p, e.desc.box_max));
+        else if (e.desc.bounds == MediumBounds::Sphere)
+            inside = glm::distance(p, e.desc.center) <= e.desc.radius;
+        if (!inside) continue;
+        const double density = (e.grid ? e.grid->at(p) : 1.0) * e.desc.density_scale;
+        sum.sigma_s += e.desc.sigma_s * density;
+        sum.sigma_a += e.desc.sigma_a * density;
+        gs += e.desc.g * e.desc.sigma_s * density;
+    }
+    sum.g = sum.sigma_s > 0.0 ? gs / sum.sigma_s : 0.0;
+    return sum;
+}
+
+SegmentOptics Media::integrate(const vec3& o, const vec3& d, double t_max) const {
+    SegmentOptics s;
+    s.length = t_max;
+    for (const Entry& e : media_) {
+        double t0, t1;
+        if (!clip(e, o, d, t_max, &t0, &t1)) continue;
+        double density_length = 0.0;  // integral of the density over the segment
+        if (e.grid)
+            e.grid->march(o, d, t0, t1,
+                          [&](double a, double b, float v) { density_length += (b - a) * v; });
+        else
+            density_length = t1 - t0;
+        density_length *= e.desc.density_scale;
+        s.tau_s += e.desc.sigma_s * density_length;
+        s.tau_a += e.desc.sigma_a * density_length;
+        s.tau_gs += e.desc.g * e.desc.sigma_s * density_length;
+    }
+    return s;
+}
+
+MediumCollision Media::sample_collision(const vec3& o, const vec3& d, double t_max,
+                                        CounterRng& rng) const {
+    MediumCollision best;
+    best.t = t_max;
+    for (const Entry& e : media_) {
+        // One uniform per medium whether or not it is crossed: the stream stays aligned.
+        const double target = -std::log1p(-rng.next_double());
+        const double sigma_t = e.desc.sigma_s + e.desc.sigma_a;
+        double t0, t1;
+        if (sigma_t <= 0.0 || !clip(e, o, d, std::min(t_max, best.t), &t0, &t1)) continue;
+        const double k = sigma_t * e.desc.density_scale;
+        if (k <= 0.0) continue;
+        double hit = -1.0, density = 1.0;
+        if (e.grid) {
+            double acc = 0.0;
+            e.grid->march(o, d, t0, t1, [&](double a, double b, float v) {
+                if (hit >= 0.0 || v <= 0.0f) return;
+                const double tau = (b - a) * v * k;
+                if (acc + tau >= target) {
+                    hit = a + (target - acc) / (v * k);
+                    density = v;
+                } else {
+                    acc += tau;
+                }
+            });
+        } else if ((t1 - t0) * k >= target) {
+            hit = t0 + target / k;
+        }
+        if (hit >= 0.0 && hit < best.t) {
+            best.happened = true;
+            best.t = hit;
+            best.sigma_t = sigma_t * density * e.desc.density_scale;
+            best.sigma_s = e.desc.sigma_s * density * e.desc.density_scale;
+            best.g = e.desc.g;
+        }
+    }
+    return best;
+}
+
+double Media::exit_distance(const vec3& o, const vec3& d) const {
+    double exit = 0.0;
+    for (const Entry& e : media_) {
+        double t0, t1;
+        if (e.desc.bounds == MediumBounds::Everywhere)
+            return std::numeric_limits<double>::infinity();
+        if (clip(e, o, d, std::numeric_limits<double>::infinity(), &t0, &t1))
+            exit = std::max(exit, t1);
+    }
+    return exit;
+}
+
+}  // namespace freqlab

@@ -1,0 +1,120 @@
+#include "volume/vdb_reader.h"
+
+#include <cmath>
+#include <filesystem>
+#include <mutex>
+
+#include <openvdb/openvdb.h>
+
+#include "base/error.h"
+#include "base/file_io.h"
+
+namespace freqlab {
+
+namespace {
+
+void initialise_openvdb() {
+    static std::once_flag once;
+    std::call_once(once, [] { openvdb::initialize(); });
+}
+
+}  // namespace
+
+VdbDensity read_vdb_density(const std::string& file, const std::string& grid_name,
+                            const std::string& scene_file, const std::string& field) {
+    initialise_openvdb();
+    if (!std::filesystem::exists(file))
+        throw Error(scene_file, field + ".file", "VDB file '" + file + "' does not exist");
+    openvdb::GridBase::Ptr base;
+    std::vector<std::string> names;
+    try {
+        openvdb::io::File vdb(file);
+        vdb.open();
+        for (auto it = vdb.beginName(); it != vdb.endName(); ++it) names.push_back(it.gridName());
+        if (vdb.hasGrid(grid_name)) base = vdb.readGrid(grid_name);
+        vdb.close();
+    } catch (const openvdb::Exception& e) {
+        throw Error(scene_file, field + ".file",
+                    "cannot read VDB file '" + file + "': " + e.what());
+    }
+    if (!base) {
+        std::string list;
+        for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+        throw Error(scene_file, field + ".grid",
+                    "VDB file '" + file + "' has no grid named '" + grid_name +
+                        "' (it has: " + (list.empty() ? "none" : list) + ")");
+    }
+    auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
+    if (!grid)
+        throw Error(scene_file, field + ".grid",
+                    "grid '" + grid_name + "' is a " + base->valueType() +
+                        " grid; expected a float density grid");
+    if (!grid->hasUniformVoxels() || !grid->transform().isLinear())
+        throw Error(scene_file, field + ".grid",
+                    "grid '" + grid_name +
+                        "' has a non-uniform or non-linear transform; expected "
+                        "cubic voxels");
+    const openvdb::CoordBBox box = grid->evalActiveVoxelBoundingBox();
+    if (box.empty())
+        throw Error(scene_file, field + ".grid", "grid '" + grid_name + "' has no active voxel");
+    const openvdb::Coord dim = box.dim();
+    if (double(dim.x()) * dim.y() * dim.z() > double(1 << 27))
+        throw Error(scene_file, field + ".grid",
+                    "grid '" + grid_name + "' spans more than 2^27 voxels; expected a smaller one");
+    VdbDensity out;
+    out.resolution = ivec3(dim.x(), dim.y(), dim.z());
+    out.voxels.resize(size_t(dim.x()) * dim.y() * dim.z());
+    auto accessor = grid->getConstAccessor();
+    for (int z = 0; z < dim.z(); ++z)
+        for (int y = 0; y < dim.y(); ++y)
+            for (int x = 0; x < dim.x(); ++x) {
+                const openvdb::Coord c = box.min() + openvdb::Coord(x, y, z);
+                const float v = accessor.getValue(c);
+                if (!std::isfinite(v) || v < 0.0f)
+                    throw Error(scene_file, field + ".grid",
+                                "grid '" + grid_name + "' has voxel (" + std::to_string(c.x()) +
+                                    ", " + std::to_string(c.y()) + ", " + std::to_string(c.z()) +
+                                    ") = " + std::to_string(v) +
+                                    "; expected a finite density >= 0");
+                out.voxels[(size_t(z) * dim.y() + y) * dim.x() + x] = v;
+            }
+    // Voxel (i, j, k) of a cell-centred VDB covers index space [i - 0.5, i + 0.5].
+    const openvdb::Vec3d lo = grid->indexToWorld(openvdb::Vec3d(box.min().asVec3d()) - 0.5);
+    const openvdb::Vec3d hi = grid->indexToWorld(openvdb::Vec3d(box.max().asVec3d()) + 0.5);
+    out.box_min =
+        vec3(std::min(lo.x(), hi.x()), std::min(lo.y(), hi.y()), std::min(lo.z(), hi.z()));
+    out.box_max =
+        vec3(std::max(lo.x(), hi.x()), std::max(lo.y(), hi.y()), std::max(lo.z(), hi.z()));
+    return out;
+}
+
+void write_vdb_density(const std::string& file, const std::string& grid_name,
+                       const VdbDensity& density) {
+    initialise_openvdb();
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setName(grid_name);
+    const vec3 voxel = (density.box_max - density.box_min) / vec3(density.resolution);
+    if (std::abs(voxel.x - voxel.y) > 1e-5f * voxel.x ||
+        std::abs(voxel.x - voxel.z) > 1e-5f * voxel.x)
+        throw Error(file, grid_name, "expected cubic voxels to write a VDB grid");
+    auto transform = openvdb::math::Transform::createLinearTransform(voxel.x);
+    // Cell centres at box_min + (i + 0.5) voxel.
+    transform->postTranslate(
+        openvdb::Vec3d(density.box_min.x, density.box_min.y, density.box_min.z) + 0.5 * voxel.x);
+    grid->setTransform(transform);
+    auto accessor = grid->getAccessor();
+    const ivec3 r = density.resolution;
+    for (int z = 0; z < r.z; ++z)
+        for (int y = 0; y < r.y; ++y)
+            for (int x = 0; x < r.x; ++x) {
+                const float v = density.voxels[(size_t(z) * r.y + y) * r.x + x];
+                if (v != 0.0f) accessor.setValue(openvdb::Coord(x, y, z), v);
+            }
+    const std::string tmp = file + ".tmp";
+    openvdb::io::File out(tmp);
+    out.write({grid});
+    out.close();
+    std::filesystem::rename(tmp, file);
+}
+
+}  // namespace freqlab

@@ -1,0 +1,162 @@
+// Participating media at bake time (volume/media.h): exact optical thickness against brute-force
+// quadrature, free-flight sampling against the exponential law (binomial tests), bounds
+// clipping against closed forms, and bad input that must name the field.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "base/error.h"
+#include "scene/json_reader.h"
+#include "scene/scene_loader.h"
+#include "volume/media.h"
+#include "volume/vdb_reader.h"
+
+using namespace freqlab;
+
+namespace {
+
+std::vector<MediumDesc> media_from(const std::string& json_text) {
+    const nlohmann::json j = nlohmann::json::parse(json_text);
+    return parse_media(JsonReader(j, "test.json", "media"), "");
+}
+
+// Midpoint rule with many steps: the brute force the DDA must match.
+double brute_tau(const Media& m, vec3 o, vec3 d, double t_max, int steps) {
+    double tau = 0.0;
+    const double h = t_max / steps;
+    for (int i = 0; i < steps; ++i) tau += m.at(o + d * float((i + 0.5) * h)).sigma_t() * h;
+    return tau;
+}
+
+}  // namespace
+
+TEST(Media, HomogeneousBoundsGiveClosedFormTransmittance) {
+    const Media m(media_from(R"([
+        {"sigma_s": 0.5, "sigma_a": 0.25, "bounds": {"box": {"min": [-1,-1,-1], "max": [1,1,1]}}},
+        {"sigma_s": 0.2, "bounds": {"sphere": {"center": [5,0,0], "radius": 2}}}])"));
+    // Along x from -3: 2 units in the box, then the sphere's 4-unit chord.
+    const vec3 o(-3, 0, 0), d(1, 0, 0);
+    EXPECT_NEAR(m.transmittance(o, d, 10.0), std::exp(-0.75 * 2 - 0.2 * 4), 1e-12);
+    EXPECT_NEAR(m.transmittance(o, d, 2.5), std::exp(-0.75 * 0.5), 1e-12);
+    // Off-centre chord of the sphere, above the box: 2 sqrt(r^2 - 1.5^2).
+    EXPECT_NEAR(m.integrate(vec3(0, 1.5f, 0), d, 20.0).tau_s, 0.2 * 2 * std::sqrt(1.75), 1e-6);
+    EXPECT_NEAR(m.exit_distance(o, d), 10.0, 1e-5);
+    const SegmentOptics s = m.integrate(o, d, 10.0);
+    EXPECT_NEAR(s.effective().sigma_s, (0.5 * 2 + 0.2 * 4) / 10.0, 1e-9);
+}
+
+TEST(Media, GridOpticalThicknessIsExactAgainstQuadrature) {
+    const Media m(media_from(R"([
+        {"sigma_s": 2.0, "sigma_a": 0.5, "g": 0.4,
+         "bounds": {"box": {"min": [-1,-2,0], "max": [1.5,1,1]}},
+         "density": {"source": "noise", "resolution": [13, 17, 9], "frequency": 2, "seed": 7}},
+        {"sigma_s": 0.1, "sigma_a": 0.0}])"));
+    ASSERT_NE(m.grid(0), nullptr);
+    EXPECT_GT(m.grid(0)->max_value(), 0.3f);
+    CounterRng rng(1, 2, 3, 4);
+    for (int i = 0; i < 20; ++i) {
+        const vec3 o(rng.next_float() * 4 - 2, rng.next_float() * 4 - 2,
+                     rng.next_float() * 2 - 0.5f);
+        vec3 d(rng.next_float() - 0.5f, rng.next_float() - 0.5f, rng.next_float() - 0.5f);
+        d = glm::normalize(d);
+        const double tau = m.integrate(o, d, 5.0).tau_s + m.integrate(o, d, 5.0).tau_a;
+        // The brute force converges like h^1 at voxel boundaries: 200k steps give ~1e-5.
+        EXPECT_NEAR(tau, brute_tau(m, o, d, 5.0, 200000), 2e-4 * (1.0 + tau)) << i;
+    }
+}
+
+TEST(Media, FreeFlightsFollowTheTransmittanceLaw) {
+    // Collisions before t must happen with probability 1 - T(t), for a superposition of a
+    // brush grid and a global medium. Binomial test at 4.5 sigma per distance.
+    const Media m(media_from(R"([
+        {"sigma_s": 1.5, "sigma_a": 0.5, "bounds": {"box": {"min": [0,-1,-1], "max": [2,1,1]}},
+         "density": {"source": "brushes", "resolution": [16, 8, 8],
+                     "brushes": [{"shape": "ellipsoid", "center": [1,0,0], "size": [1.6,1.6,1.6]},
+                                 {"shape": "box", "center": [0.3,0,0], "size": [0.4,2,2], "density": 0.5}]}},
+        {"sigma_s": 0.1, "sigma_a": 0.05}])"));
+    const vec3 o(-0.5f, 0.05f, 0.02f), d(1, 0, 0);
+    const int n = 40000;
+    std::vector<double> hits;
+    for (int i = 0; i < n; ++i) {
+        CounterRng rng(9, 0, uint64_t(i), 0);
+        const MediumCollision c = m.sample_collision(o, d, 3.0, rng);
+        if (c.happened) {
+            hits.push_back(c.t);
+            ASSERT_GT(c.sigma_t, 0.0);
+            ASSERT_LE(c.sigma_s, c.sigma_t);
+        }
+    }
+    for (double t : {0.4, 0.8, 1.2, 1.6, 2.2, 3.0}) {
+        const double p = 1.0 - m.transmittance(o, d, t);
+        const double count =
+            double(std::count_if(hits.begin(), hits.end(), [t](double h) { return h < t; }));
+        const double sigma = std::sqrt(n * p * (1 - p));
+        EXPECT_NEAR(count, n * p, 4.5 * sigma + 1) << "t = " << t;
+    }
+}
+
+TEST(Media, BadInputNamesTheField) {
+    auto expect_field = [](const std::string& text, const std::string& field) {
+        try {
+            media_from(text);
+            ADD_FAILURE() << "accepted: " << text;
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+        }
+    };
+    expect_field(R"([{"sigma_s": -1}])", "media[0].sigma_s");
+    expect_field(R"([{"sigma_s": 1, "sigma_a": -0.1}])", "media[0].sigma_a");
+    expect_field(R"([{"sigma_s": 1, "g": 1.0}])", "media[0].g");
+    expect_field(R"([{"sigma_s": 1, "g": -1.5}])", "media[0].g");
+    expect_field(R"([{"sigma_s": 1, "density": {"source": "noise"}}])", "media[0].density");
+    expect_field(R"([{"sigma_s": 1, "bounds": {"box": {"min": [0,0,0], "max": [1,0,1]}}}])",
+                 "media[0].bounds.box.max");
+}
+
+TEST(Media, VdbGridsLoadAndBadGridsAreErrors) {
+    const auto dir = std::filesystem::temp_directory_path() / "freqlab_vdb_test";
+    std::filesystem::create_directories(dir);
+    VdbDensity g;
+    g.box_min = vec3(0.0f);
+    g.box_max = vec3(1.0f, 0.5f, 0.25f);
+    g.resolution = ivec3(8, 4, 2);
+    g.voxels.resize(64);
+    for (size_t i = 0; i < g.voxels.size(); ++i) g.voxels[i] = 0.25f + float(i % 5);
+    const std::string file = (dir / "smoke.vdb").string();
+    write_vdb_density(file, "density", g);
+    MediumDesc desc;
+    desc.density = DensitySource::Vdb;
+    desc.vdb_file = file;
+    desc.sigma_s = 1.0;
+    const Media m({desc}, "scene.json");
+    ASSERT_NE(m.grid(0), nullptr);
+    EXPECT_EQ(m.grid(0)->resolution(), g.resolution);
+    EXPECT_NEAR(m.grid(0)->box_max().x, 1.0f, 1e-5f);
+    // Voxel (3, 2, 1) read back where it was written.
+    EXPECT_FLOAT_EQ(m.at(vec3(3.5f, 2.5f, 1.5f) * 0.125f).sigma_s, g.voxels[(1 * 4 + 2) * 8 + 3]);
+
+    desc.vdb_grid = "smoke";
+    try {
+        Media bad({desc}, "scene.json");
+        ADD_FAILURE() << "a missing grid name was accepted";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.field(), "media[0].density.grid");
+        EXPECT_NE(e.message().find("density"), std::string::npos) << e.what();  // lists grids
+    }
+    g.voxels[10] = std::nanf("");
+    write_vdb_density(file, "density", g);
+    desc.vdb_grid = "density";
+    EXPECT_THROW(Media({desc}, "scene.json"), Error);
+    desc.vdb_file = (dir / "absent.vdb").string();
+    EXPECT_THROW(Media({desc}, "scene.json"), Error);
+}
+
+TEST(Media, SceneWithoutMediaHasNone) {
+    const Scene s =
+        load_scene(std::string(FREQLAB_SOURCE_DIR) + "/scenes/analytic/sphere_on_plane.json");
+    EXPECT_TRUE(Media(s.media).empty());
+    const Scene f =
+        load_scene(std::string(FREQLAB_SOURCE_DIR) + "/scenes/analytic/fog_receiver.json");
+    EXPECT_EQ(Media(f.media).size(), 1u);
+}
