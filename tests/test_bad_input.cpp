@@ -156,9 +156,15 @@ TEST(BadInput, TwoEnvironments) {
         "lights[1]", "only one environment");
 }
 
-TEST(BadInput, MediaNotYetSupported) {
-    expect_error(scene_with("[" + kPlane + "]", R"(, "media": [{"sigma_s": 1}])"), "media",
-                 "not supported yet");
+TEST(BadInput, MediaCoefficients) {
+    expect_error(scene_with("[" + kPlane + "]", R"(, "media": [{"sigma_s": -1}])"),
+                 "media[0].sigma_s", "expected");
+    expect_error(scene_with("[" + kPlane + "]", R"(, "media": [{"sigma_s": 1, "g": 1}])"),
+                 "media[0].g", "expected");
+    expect_error(scene_with("[" + kPlane + "]",
+                            R"(, "media": [{"sigma_s": 1, "density": {"source": "vdb",
+                                "file": "absent.vdb"}}])"),
+                 "media[0].density.file", "does not exist");
 }
 
 TEST(BadInput, PhongWithoutExponent) {

@@ -94,6 +94,8 @@ void read_density(const JsonReader& r, MediumDesc& m, const std::string& scene_d
         m.vdb_file = std::filesystem::path(file).is_absolute() || scene_dir.empty()
                          ? file
                          : (std::filesystem::path(scene_dir) / file).string();
+        if (!std::filesystem::exists(m.vdb_file))
+            r.get("file").fail("expected an OpenVDB file; '" + m.vdb_file + "' does not exist");
         if (r.has("grid")) m.vdb_grid = r.get("grid").string();
     }
     if (r.has("resolution")) m.resolution = read_resolution(r.get("resolution"));

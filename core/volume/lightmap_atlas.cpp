@@ -120,13 +120,15 @@ bool wants_lightmap(const Scene& scene, const SceneObject& o) {
     return scene.materials[o.material].type != BrdfType::Mirror;
 }
 
-// Fraction of rays from p over the sphere that hit a back face (the inside of a closed mesh).
+// Fraction of rays over p's hemisphere that hit a back face: a texel inside a closed mesh sees
+// only back faces there (the other hemisphere holds its own surface, front-facing).
 float backface_fraction(const RayScene& rs, const vec3& p, const vec3& n, int rays, uint64_t key) {
     int back = 0, hits = 0;
     for (int i = 0; i < rays; ++i) {
         CounterRng rng(key, 0x7e57, 0, uint64_t(i));
         const float u1 = rng.next_float(), u2 = rng.next_float();
-        const vec3 d = sample_uniform_sphere(u1, u2);
+        vec3 d = sample_uniform_sphere(u1, u2);
+        if (glm::dot(d, n) < 0.0f) d = -d;
         Ray ray{p + n * 1e-4f * (1.0f + glm::length(p)), d, 0.0f, INFINITY};
         const SurfaceHit h = rs.intersect(ray);
         if (!h.valid) continue;

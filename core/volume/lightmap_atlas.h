@@ -6,7 +6,7 @@
 // `texel_density` texels per scene unit and shelf-packed (tallest first) with a gutter of
 // `padding` texels. A texel whose centre falls inside a triangle is placed at that point;
 // a valid texel whose hemisphere sees more back faces than `backface_tolerance` (a fraction of
-// `validity_rays` rays over the sphere) lies inside geometry and is flagged; after a bake,
+// `validity_rays` rays over its hemisphere) lies inside geometry and is flagged; after a bake,
 // empty and invalid texels next to valid ones take their neighbours' mean (dilation), so
 // bilinear lookups do not bleed black. Spheres (exact primitives, no mesh), moving objects
 // and perfect mirrors get no lightmap (a mirror's appearance is not view-independent).
