@@ -15,9 +15,10 @@ const SettingsSchema& BakeSettings::schema() {
             .choice(&BakeSettings::back_scatter, "back_scatter", {"off", "albedo", "on"},
                     kInvalidatesBake,
                     "Impulse's back-scatter compensation (seed §5.2): off = infinite-medium "
-                    "tables; on = the shifted-receiver tables everywhere; albedo = blended by "
-                    "the receiver's albedo (light reflected into the medium by the surface "
-                    "itself scales with it; a black receiver gets none).")
+                    "tables; on = the receiver shifted 0.125 optical units towards the emitter "
+                    "everywhere; albedo = that shift times the receiver's albedo (light the "
+                    "surface itself reflects into the medium scales with it; a black receiver "
+                    "gets none).")
             .field(&BakeSettings::texel_density, "texel_density", 0.01, 4096, "texels/unit",
                    kInvalidatesBake, "Lightmap resolution: texels per scene unit.")
             .field(&BakeSettings::max_size, "max_size", 16, 8192, "texels", kInvalidatesBake,

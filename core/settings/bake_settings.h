@@ -15,7 +15,7 @@ struct BakeSettings {
     int spp = 64;            // paths per texel
     int bounces = 2;         // indirect surface bounces after the first vertex
     int media_bounces = 30;  // scattering events in media: 1 = single scattering only
-    BackScatter back_scatter = BackScatter::Albedo;
+    BackScatter back_scatter = BackScatter::Off;
     float texel_density = 16.0f;  // texels per scene unit
     int max_size = 1024;          // atlas side limit
     int padding = 2;              // gutter texels per chart

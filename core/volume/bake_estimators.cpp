@@ -166,6 +166,7 @@ void BakeEstimator::add_scattered(EmitterKind kind, const vec3& intensity, const
     // The tables cover |g| <= kGRange; stronger anisotropy is clamped (stated in the header).
     q.medium.g = std::clamp(m.g, -kGRange, kGRange);
     q.last_bounce = std::min(settings_.media_bounces, table_bounces_);
+    q.collapsed = true;
     double w_surface = 0.0;
     switch (settings_.back_scatter) {
         case BackScatter::Off:
@@ -178,20 +179,17 @@ void BakeEstimator::add_scattered(EmitterKind kind, const vec3& intensity, const
             w_surface = std::clamp(double(albedo_lum), 0.0, 1.0);
             break;
     }
-    ZhVector single{}, multiple{};
-    double tilt = 0.0;
-    for (int v = 0; v < 2; ++v) {
-        const double w = v == 0 ? 1.0 - w_surface : w_surface;
-        if (w <= 0.0) continue;
-        q.variant = v == 0 ? TableVariant::Infinite : TableVariant::Surface;
-        const ImpulseResponse r = query_impulse(*tables_, q);
-        ++counters.impulse_queries;
-        for (int l = 0; l < kImpulseOrder; ++l) {
-            single[size_t(l)] += w * r.single[size_t(l)];
-            multiple[size_t(l)] += w * r.multiple[size_t(l)];
-        }
-        tilt = r.axis_tilt;  // the same for both variants (fitted per distance and shift)
-    }
+    // The surface variant is the infinite one at a receiver shifted kBackScatterShift optical
+    // units towards the emitter (impulse_query.h); the albedo blend scales that shift, so one
+    // lookup serves every mode and the two ends are exactly off and on.
+    q.variant = TableVariant::Infinite;
+    q.distance = std::max(distance - w_surface * kBackScatterShift / m.sigma_t(),
+                          ZhDistanceTable::kMinD / m.sigma_t());
+    const ImpulseResponse r = query_impulse(*tables_, q);
+    ++counters.impulse_queries;
+    const ZhVector& single = r.single;
+    const ZhVector& multiple = r.multiple;
+    const double tilt = r.axis_tilt;
     const glm::dvec3 l(dir);
     glm::dvec3 axis = l;
     if (kind == EmitterKind::Area && tilt != 0.0) {

@@ -44,11 +44,13 @@ ImpulseResponse query_impulse(const ImpulseTables& t, const ImpulseQuery& q) {
     const bool multiple = q.last_bounce >= 2;
     switch (q.emitter) {
         case EmitterKind::Point:
-            r.single = t.point_single().single(m, d);
-            if (multiple) r.multiple = t.point_multiple().bounces_in(similar, d, 2, q.last_bounce);
+            r.single = t.point_single().single(m, d, q.collapsed);
+            if (multiple)
+                r.multiple =
+                    t.point_multiple().bounces_in(similar, d, 2, q.last_bounce, q.collapsed);
             break;
         case EmitterKind::Directional:
-            r.single = t.directional_single().single(m, d);
+            r.single = t.directional_single().single(m, d, q.collapsed);
             if (multiple)
                 r.multiple = t.directional_multiple().bounces_in(similar, d, 2, q.last_bounce);
             break;
@@ -57,7 +59,8 @@ ImpulseResponse query_impulse(const ImpulseTables& t, const ImpulseQuery& q) {
             r.single = s.zh;
             r.axis_tilt = s.tilt;
             if (multiple) {
-                r.multiple = t.point_multiple().bounces_in(similar, d, 2, q.last_bounce);
+                r.multiple =
+                    t.point_multiple().bounces_in(similar, d, 2, q.last_bounce, q.collapsed);
                 for (double& v : r.multiple) v *= 0.25;
             }
             break;

@@ -39,6 +39,9 @@ struct ImpulseQuery {
     HomogeneousMedium medium{1.0, 0.0, 0.0};
     int last_bounce = 1;  // 1: single scattering only; K: bounces 2..K as `multiple`
     TableVariant variant = TableVariant::Infinite;
+    // Bakers: g and the albedo quantised (2^-20, 2^-24; relative change < 1e-6) so that the
+    // sums over phase terms and bounces collapse once per medium (collapse_memo.h).
+    bool collapsed = false;
 };
 
 struct ImpulseResponse {

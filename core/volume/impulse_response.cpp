@@ -1,5 +1,7 @@
 #include "volume/impulse_response.h"
 
+#include "volume/collapse_memo.h"
+
 #include "math/sh.h"
 #include "volume/polar_quadrature.h"
 
@@ -311,7 +313,8 @@ std::vector<std::vector<ZhVector>> SingleScatterTable::canonical_terms() const {
     return out;
 }
 
-ZhVector SingleScatterTable::single(const HomogeneousMedium& m, double distance) const {
+ZhVector SingleScatterTable::single(const HomogeneousMedium& m, double distance,
+                                    bool collapse) const {
     ZhVector z{};
     const ZhDistanceTable::Trend trend = emitter_ == Emitter::Point
                                              ? ZhDistanceTable::Trend::PointLike
@@ -319,15 +322,38 @@ ZhVector SingleScatterTable::single(const HomogeneousMedium& m, double distance)
     const ZhDistanceTable::Stencil st = ZhDistanceTable::stencil(trend, m.sigma_t() * distance);
     if (!st.valid) return z;
     // HG = sum_k g^k b_k: the response is the same sum of the basis responses; terms below
-    // |g|^k = 1e-10 are skipped (12 terms at |g| = 0.15, 32 at |g| = 0.5).
+    // |g|^k = 1e-10 are skipped (12 terms at |g| = 0.15, 32 at |g| = 0.5). The sum over terms
+    // is collapsed once per g (quantised to 2^-20) and memoised per thread (collapse_memo.h).
     const size_t nt = terms_.size();
-    double gk = 1.0;
-    for (size_t j = 0; j < nt && std::fabs(gk) > 1e-10; ++j, gk *= m.g)
+    const double gq = std::round(m.g * 1048576.0) / 1048576.0;
+    const std::vector<double>* collapsed =
+        !collapse
+            ? nullptr
+            : CollapseMemo::get(memo_id_, uint64_t(int64_t(gq * 1048576.0) + (1ll << 40)), [&] {
+                  std::vector<double> c(size_t(ZhDistanceTable::kBins) * kImpulseOrder, 0.0);
+                  for (size_t b = 0; b < size_t(ZhDistanceTable::kBins); ++b) {
+                      double gk = 1.0;
+                      for (size_t j = 0; j < nt && std::fabs(gk) > 1e-10; ++j, gk *= gq)
+                          for (int l = 0; l < kImpulseOrder; ++l)
+                              c[b * kImpulseOrder + size_t(l)] +=
+                                  gk * packed_[(b * nt + j) * kImpulseOrder + size_t(l)];
+                  }
+                  return c;
+              });
+    if (collapsed) {
         for (int k = 0; k < 4; ++k) {
-            const double w = gk * st.weight[k];
-            const double* row = &packed_[(size_t(st.bin[k]) * nt + j) * kImpulseOrder];
-            for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += w * row[l];
+            const double* row = &(*collapsed)[size_t(st.bin[k]) * kImpulseOrder];
+            for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += st.weight[k] * row[l];
         }
+    } else {
+        double gk = 1.0;
+        for (size_t j = 0; j < nt && std::fabs(gk) > 1e-10; ++j, gk *= m.g)
+            for (int k = 0; k < 4; ++k) {
+                const double w = gk * st.weight[k];
+                const double* row = &packed_[(size_t(st.bin[k]) * nt + j) * kImpulseOrder];
+                for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += w * row[l];
+            }
+    }
     // Optical-distance substitution (see the header): the factors were derived, then tested.
     const double factor =
         (emitter_ == Emitter::Point ? m.sigma_s * m.sigma_t() : m.sigma_s / m.sigma_t()) * st.trend;

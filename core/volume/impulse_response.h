@@ -22,6 +22,7 @@
 #include <functional>
 #include <vector>
 
+#include "volume/collapse_memo.h"
 #include "volume/medium.h"
 #include "volume/polar_quadrature.h"
 
@@ -119,14 +120,17 @@ class SingleScatterTable {
     double worst_relative_error() const;
     // Single-scattered ZH at `distance` (point: to the emitter; directional: to the medium's
     // boundary) in `medium`.
-    ZhVector single(const HomogeneousMedium& medium, double distance) const;
+    // `collapsed` (bakers): g quantised to 2^-20 and the phase-term sum memoised per g
+    // (collapse_memo.h); otherwise the exact sum at g.
+    ZhVector single(const HomogeneousMedium& medium, double distance, bool collapsed = false) const;
 
   private:
     void pack();
     Emitter emitter_;
     std::vector<ZhDistanceTable> terms_;  // one per phase basis term
     std::vector<double> packed_;          // [bin][term][l] scaled values: one query reads 4 blocks
-    std::vector<double> error_;           // [bin]
+    uint64_t memo_id_ = CollapseMemo::next_owner_id();  // collapsed-over-g memo (single())
+    std::vector<double> error_;                         // [bin]
 };
 
 }  // namespace freqlab

@@ -89,9 +89,10 @@ ivec2 pack(std::vector<Chart>& charts, float density, int padding, int max_size)
         c.h = int(std::ceil((c.hi.y - c.lo.y) * density)) + 1 + 2 * padding;
         area += double(c.w) * c.h;
     }
-    int width = 16;
-    while (double(width) * width < 1.3 * area) width *= 2;
+    // Near-square atlases: the side holds the widest chart and ~15 % shelf waste.
+    int width = std::max(4, int(std::ceil(std::sqrt(1.15 * area))));
     for (const Chart& c : charts) width = std::max(width, c.w);
+    width = (width + 3) / 4 * 4;
     if (width > max_size) return {0, 0};
     std::vector<int> order(charts.size());
     std::iota(order.begin(), order.end(), 0);

@@ -1,5 +1,7 @@
 #include "volume/multiple_scatter.h"
 
+#include "volume/collapse_memo.h"
+
 #include "math/sh.h"
 #include "volume/polar_quadrature.h"
 
@@ -101,7 +103,7 @@ ZhVector PointMultipleScatter::canonical(int k, double D) const {
 }
 
 ZhVector PointMultipleScatter::bounces_in(const HomogeneousMedium& m, double distance, int first,
-                                          int last) const {
+                                          int last, bool collapse) const {
     ZhVector z{};
     const double c = m.sigma_s / m.sigma_t(), D = m.sigma_t() * distance;
     const ZhDistanceTable::Stencil st =
@@ -109,14 +111,38 @@ ZhVector PointMultipleScatter::bounces_in(const HomogeneousMedium& m, double dis
     first = std::max(first, 1);
     last = std::min(last, bounces());
     if (!st.valid || first > last) return z;
-    // One stencil for every bounce; the albedo weights c^k fold into the bin weights.
+    // One stencil for every bounce; the albedo weights c^k fold into the bin weights. The sum
+    // over bounces is collapsed once per (albedo quantised to 2^-24, first, last) and memoised
+    // per thread (collapse_memo.h).
     const size_t nk = zh_.size();
-    const double first_weight = std::pow(c, first);
-    for (int j = 0; j < 4; ++j) {
-        double ck = first_weight * st.weight[j];
-        const double* row = &packed_[(size_t(st.bin[j]) * nk + size_t(first)) * kImpulseOrder];
-        for (int k = first; k <= last; ++k, ck *= c, row += kImpulseOrder)
-            for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += ck * row[l];
+    const double cq = std::round(c * 16777216.0) / 16777216.0;
+    const uint64_t key =
+        (uint64_t(cq * 16777216.0) << 16) | (uint64_t(first) << 8) | uint64_t(last);
+    const std::vector<double>* collapsed =
+        !collapse ? nullptr : CollapseMemo::get(memo_id_, key, [&] {
+            std::vector<double> out(size_t(ZhDistanceTable::kBins) * kImpulseOrder, 0.0);
+            for (size_t b = 0; b < size_t(ZhDistanceTable::kBins); ++b) {
+                double ck = std::pow(cq, first);
+                const double* row = &packed_[(b * nk + size_t(first)) * kImpulseOrder];
+                for (int k = first; k <= last; ++k, ck *= cq, row += kImpulseOrder)
+                    for (int l = 0; l < kImpulseOrder; ++l)
+                        out[b * kImpulseOrder + size_t(l)] += ck * row[l];
+            }
+            return out;
+        });
+    if (collapsed) {
+        for (int j = 0; j < 4; ++j) {
+            const double* row = &(*collapsed)[size_t(st.bin[j]) * kImpulseOrder];
+            for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += st.weight[j] * row[l];
+        }
+    } else {
+        const double first_weight = std::pow(c, first);
+        for (int j = 0; j < 4; ++j) {
+            double ck = first_weight * st.weight[j];
+            const double* row = &packed_[(size_t(st.bin[j]) * nk + size_t(first)) * kImpulseOrder];
+            for (int k = first; k <= last; ++k, ck *= c, row += kImpulseOrder)
+                for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += ck * row[l];
+        }
     }
     // Trend e^-D / D^2 (the stencil's is e^-D / D) and the sigma_t^2 of the remap.
     const double factor = m.sigma_t() * m.sigma_t() * std::exp(-D) / (D * D);

@@ -20,6 +20,8 @@
 
 #include <vector>
 
+#include "volume/collapse_memo.h"
+
 #include "volume/impulse_response.h"
 
 namespace freqlab {
@@ -41,14 +43,17 @@ class PointMultipleScatter {
     ZhVector canonical(int k, double optical_distance) const;
     // Fluence of bounce k (0 <= k <= bounces) at optical distance D (canonical medium).
     double fluence(int k, double optical_distance) const;
-    // Sum of bounces first..last in `medium` at `distance` (albedo weights c^k).
-    ZhVector bounces_in(const HomogeneousMedium& medium, double distance, int first,
-                        int last) const;
+    // Sum of bounces first..last in `medium` at `distance` (albedo weights c^k). `collapsed`
+    // (bakers): the albedo quantised to 2^-24 and the sum over bounces memoised per albedo
+    // (collapse_memo.h); otherwise the exact sum.
+    ZhVector bounces_in(const HomogeneousMedium& medium, double distance, int first, int last,
+                        bool collapsed = false) const;
 
   private:
-    std::vector<std::vector<double>> fluence_scaled_;  // [k][bin]: phi_k(D) D^2 e^D
-    std::vector<std::vector<ZhVector>> zh_;            // [k][bin] (k = 0 unused)
-    std::vector<double> packed_;                       // [bin][k][l] zh_ x D^2 e^D
+    std::vector<std::vector<double>> fluence_scaled_;   // [k][bin]: phi_k(D) D^2 e^D
+    std::vector<std::vector<ZhVector>> zh_;             // [k][bin] (k = 0 unused)
+    std::vector<double> packed_;                        // [bin][k][l] zh_ x D^2 e^D
+    uint64_t memo_id_ = CollapseMemo::next_owner_id();  // collapsed-over-bounces memo
     void scale();
 };
 
