@@ -31,6 +31,11 @@ const SettingsSchema& BakeSettings::schema() {
                    "geometry and is flagged invalid (then dilated over).")
             .field(&BakeSettings::dilation, "dilation", 0, 16, "texels", kInvalidatesBake,
                    "Rings of empty / invalid texels filled from their valid neighbours.")
+            .field(&BakeSettings::tabulated_irradiance, "tabulated_irradiance", 0, 1, "",
+                   kInvalidatesBake,
+                   "Impulse: tabulate the ZH x clamped-cosine double product once per medium over "
+                   "distance and cosine (one lookup per segment); off queries the tables and "
+                   "integrates per segment.")
             .field(&BakeSettings::seed, "seed", 0, 1 << 30, "", kInvalidatesBake,
                    "Random seed of the bake (results never depend on the thread count).")
             .build();

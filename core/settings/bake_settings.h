@@ -20,7 +20,9 @@ struct BakeSettings {
     int max_size = 1024;          // atlas side limit
     int padding = 2;              // gutter texels per chart
     float backface_tolerance = 0.3f;
-    int dilation = 2;  // rings of texels filled around charts after a bake
+    int dilation = 2;
+    bool tabulated_irradiance = true;  // impulse: double products tabulated per medium  // rings of
+                                       // texels filled around charts after a bake
     int seed = 0;
     static const SettingsSchema& schema();
 };

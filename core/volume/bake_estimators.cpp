@@ -74,7 +74,11 @@ BakeEstimator::BakeEstimator(const RayScene& scene, const Media& media, const Im
     : scene_(scene), media_(media), tables_(tables), method_(method), settings_(settings) {
     if (method == BakeMethod::Impulse && !media.empty() && !tables)
         throw Error("", "--method", "impulse needs the impulse-response tables");
-    if (tables) table_bounces_ = tables->bounces();
+    if (tables) {
+        table_bounces_ = tables->bounces();
+        if (settings.tabulated_irradiance)
+            irradiance_ = std::make_unique<ImpulseIrradianceCache>(*tables);
+    }
     zh_clamped_cosine(kImpulseOrder, cosine_zh_);
 }
 
@@ -185,19 +189,36 @@ void BakeEstimator::add_scattered(EmitterKind kind, const vec3& intensity, const
     q.variant = TableVariant::Infinite;
     q.distance = std::max(distance - w_surface * kBackScatterShift / m.sigma_t(),
                           ZhDistanceTable::kMinD / m.sigma_t());
+    const glm::dvec3 l(dir), nd(n);
+    auto tilted_axis = [&](double tilt) {
+        glm::dvec3 t = glm::dvec3(emitter_normal) - glm::dot(glm::dvec3(emitter_normal), l) * l;
+        const double len = glm::length(t);
+        return len > 1e-9 && tilt != 0.0 ? std::cos(tilt) * l + std::sin(tilt) * (t / len) : l;
+    };
+    if (const ImpulseIrradiance* table =
+            irradiance_ ? irradiance_->get(q.medium.g, m.sigma_s / m.sigma_t(), q.last_bounce)
+                        : nullptr) {
+        // The tabulated double product (impulse_irradiance.h): one lookup per part.
+        const ImpulseIrradiance::At D = ImpulseIrradiance::at(m.sigma_t() * q.distance);
+        const double scale = kind == EmitterKind::Directional ? 1.0 : m.sigma_t() * m.sigma_t();
+        ScatteredIrradiance e;
+        if (kind == EmitterKind::Point)
+            e = table->point(D, glm::dot(l, nd));
+        else if (kind == EmitterKind::Directional)
+            e = table->directional(D, glm::dot(l, nd));
+        else
+            e = table->area(D, q.shift, glm::dot(tilted_axis(table->tilt(D, q.shift)), nd),
+                            glm::dot(l, nd));
+        ++counters.impulse_queries;
+        out.single += intensity * float(std::max(0.0, e.single * scale));
+        out.multiple += intensity * float(std::max(0.0, e.multiple * scale));
+        return;
+    }
     const ImpulseResponse r = query_impulse(*tables_, q);
     ++counters.impulse_queries;
     const ZhVector& single = r.single;
     const ZhVector& multiple = r.multiple;
-    const double tilt = r.axis_tilt;
-    const glm::dvec3 l(dir);
-    glm::dvec3 axis = l;
-    if (kind == EmitterKind::Area && tilt != 0.0) {
-        glm::dvec3 t = glm::dvec3(emitter_normal) - glm::dot(glm::dvec3(emitter_normal), l) * l;
-        const double len = glm::length(t);
-        if (len > 1e-9) axis = std::cos(tilt) * l + std::sin(tilt) * (t / len);
-    }
-    const glm::dvec3 nd(n);
+    const glm::dvec3 axis = kind == EmitterKind::Area ? tilted_axis(r.axis_tilt) : l;
     const double e_single = zh_double_product(kImpulseOrder, single.data(), axis, cosine_zh_, nd);
     const double e_multiple = zh_double_product(kImpulseOrder, multiple.data(), l, cosine_zh_, nd);
     // A truncated ZH lobe rings slightly negative far from its axis; irradiance cannot.
@@ -224,7 +245,10 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     const bool attenuate = method_ != BakeMethod::Surface && !media_.empty();
     const bool scatter = method_ == BakeMethod::Impulse && !media_.empty();
     const float albedo_lum = luminance(albedo);
-    std::vector<EmitterSample> local;
+    // One buffer per path depth and thread: no allocation per vertex.
+    thread_local std::vector<std::vector<EmitterSample>> buffers;
+    if (buffers.size() <= size_t(depth)) buffers.resize(size_t(depth) + 1);
+    std::vector<EmitterSample> local = std::move(buffers[size_t(depth)]);
     sample_emitters(p, rng, local);
     for (const EmitterSample& s : local) {
         const float cos_x = glm::dot(n, s.dir);
@@ -245,6 +269,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
                           n, albedo_lum, parts, counters);
         }
     }
+    buffers[size_t(depth)] = std::move(local);
     if (depth >= settings_.bounces) return parts;
     // One indirect segment, cosine-sampled: irradiance = pi x radiance on average.
     const float u1 = rng.next_float(), u2 = rng.next_float();

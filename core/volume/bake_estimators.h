@@ -24,6 +24,7 @@
 #include "accel/ray_scene.h"
 #include "math/rng.h"
 #include "settings/bake_settings.h"
+#include "volume/impulse_irradiance.h"
 #include "volume/impulse_query.h"
 #include "volume/media.h"
 
@@ -82,6 +83,7 @@ class BakeEstimator {
     BakeMethod method_;
     BakeSettings settings_;
     int table_bounces_ = 1;
+    std::unique_ptr<ImpulseIrradianceCache> irradiance_;  // impulse: tabulated double products
     double cosine_zh_[kImpulseOrder];
 };
 
