@@ -39,6 +39,9 @@ struct BenchArgs {
     std::string out = "freqlab-out/bench";
     std::string frames;    // cache studies: A:B (default: every frame of the scene)
     int error_every = 10;  // cache studies: RMSE against the reference on every k-th frame
+    int reference_spp = 4096;  // bake study: the VPT reference
+    int max_spp = 1024;        // bake study: impulse and extinction curves
+    int overhead_spp = 64;     // bake study: equal-sample overhead and re-bake
 };
 int run_bench(const BenchArgs& args);
 
@@ -56,7 +59,8 @@ struct BakeArgs {
     std::string out;
 };
 int run_bake(const BakeArgs& args);          // bake.cpp
-int run_bench_cache(const BenchArgs& args);  // studies cache, cache-ablation (bench_cache.cpp)
+int run_bench_cache(const BenchArgs& args);
+int run_bench_bake(const BenchArgs& args);  // study bake (bench_bake.cpp)  // studies cache, cache-ablation (bench_cache.cpp)
 
 struct FigureArgs {
     std::string input;  // an EXR written by freqlab (or any EXR)

@@ -161,6 +161,10 @@ int main(int argc, char** argv) {
     bench->add_option("--frame", ba.frame, "frame");
     bench->add_option("--size", ba.size, "WxH");
     bench->add_option("--runs", ba.runs, "independent adaptive renders per pixel error");
+    bench->add_option("--reference-spp", ba.reference_spp, "bake study: VPT reference samples");
+    bench->add_option("--max-spp", ba.max_spp, "bake study: impulse / extinction curve length");
+    bench->add_option("--overhead-spp", ba.overhead_spp,
+                      "bake study: samples of the overhead and re-bake runs");
     bench->add_option("--set", ba.sets, "key=value setting (repeatable)");
     bench->add_option("--out", ba.out, "output directory (bench_points.json)");
 

@@ -23,7 +23,6 @@ namespace freqlab {
 
 namespace {
 
-constexpr double kPiD = 3.14159265358979323846;
 constexpr const char* kMagic = "freqlab-env-bandwidth";
 
 // FFTW's planner is not thread-safe; execution on fresh arrays of the same alignment is.

@@ -38,16 +38,18 @@ void write_line_plot(const std::filesystem::path& path, const LinePlot& plot) {
         if (s.x.size() != s.y.size() || s.x.empty())
             throw Error(path.string(), "series " + s.name, "expected as many x as y values, > 0");
         for (size_t i = 0; i < s.x.size(); ++i) {
+            const double x = plot.log_x ? std::log10(s.x[i]) : s.x[i];
             const double y = plot.log_y ? std::log10(s.y[i]) : s.y[i];
-            if (!std::isfinite(s.x[i]) || !std::isfinite(y))
+            if (!std::isfinite(x) || !std::isfinite(y))
                 throw Error(path.string(), "series " + s.name,
                             "non-finite value (or <= 0 on a log axis)");
-            x0 = std::min(x0, s.x[i]), x1 = std::max(x1, s.x[i]);
+            x0 = std::min(x0, x), x1 = std::max(x1, x);
             y0 = std::min(y0, y), y1 = std::max(y1, y);
         }
     }
     if (plot.series.empty()) throw Error(path.string(), "series", "nothing to plot");
     if (!plot.log_y) y0 = std::min(y0, 0.0);
+    auto fx = [&](double x) { return plot.log_x ? std::log10(x) : x; };
     if (x1 <= x0) x1 = x0 + 1;
     if (y1 <= y0) y1 = y0 + 1;
     const int W = plot.width, H = plot.height, left = 90, right = 20, top = 50, bottom = 60;
@@ -70,7 +72,8 @@ void write_line_plot(const std::filesystem::path& path, const LinePlot& plot) {
     const double xs = nice_step(x0, x1, 8), ys = nice_step(y0, y1, 6);
     for (double x = std::ceil(x0 / xs) * xs; x <= x1 + 1e-9 * xs; x += xs) {
         ImageBufAlgo::render_line(buf, px(x), top, px(x), H - bottom, grid);
-        text(px(x) - 10, H - bottom + 20, tick_label(x), 14, axis);
+        text(px(x) - 10, H - bottom + 20, tick_label(plot.log_x ? std::pow(10.0, x) : x), 14,
+             axis);
     }
     for (double y = std::ceil(y0 / ys) * ys; y <= y1 + 1e-9 * ys; y += ys) {
         ImageBufAlgo::render_line(buf, left, py(y), W - right, py(y), grid);
@@ -88,8 +91,8 @@ void write_line_plot(const std::filesystem::path& path, const LinePlot& plot) {
             const double ya = plot.log_y ? std::log10(s.y[i - 1]) : s.y[i - 1];
             const double yb = plot.log_y ? std::log10(s.y[i]) : s.y[i];
             for (int t = 0; t < 2; ++t)  // two pixels thick
-                ImageBufAlgo::render_line(buf, px(s.x[i - 1]), py(ya) + t, px(s.x[i]), py(yb) + t,
-                                          c);
+                ImageBufAlgo::render_line(buf, px(fx(s.x[i - 1])), py(ya) + t, px(fx(s.x[i])),
+                                          py(yb) + t, c);
         }
         const int ly = top + 12 + 20 * int(k);
         ImageBufAlgo::render_box(buf, left + 12, ly - 10, left + 26, ly + 2, c, true);

@@ -19,7 +19,7 @@ struct PlotSeries {
 struct LinePlot {
     std::string title, x_label, y_label;
     std::vector<PlotSeries> series;
-    bool log_y = false;
+    bool log_x = false, log_y = false;
     int width = 900, height = 520;
     std::string font = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
 };

@@ -6,7 +6,6 @@ namespace freqlab {
 
 namespace {
 
-constexpr double kPiD = 3.14159265358979323846;
 
 // K_l^m with the factorial ratio built as a product, stable for the orders used here.
 double sh_norm(int l, int m) {

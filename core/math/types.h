@@ -18,6 +18,7 @@ using glm::vec3;
 using glm::vec4;
 
 constexpr float kPi = 3.14159265358979323846f;
+constexpr double kPiD = 3.14159265358979323846;
 constexpr float kInvPi = 0.31830988618379067154f;
 constexpr float kTwoPi = 6.28318530717958647692f;
 

@@ -12,7 +12,6 @@ namespace freqlab {
 
 namespace {
 
-constexpr double kPiD = 3.14159265358979323846;
 // sqrt(E[theta^2] / 2) for the cosine-weighted hemisphere: E[theta^2] = pi^2 / 4 - 1.
 const double kLambertSigma = std::sqrt(0.5 * (kPiD * kPiD / 4.0 - 1.0));
 

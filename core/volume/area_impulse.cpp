@@ -12,7 +12,6 @@ namespace freqlab {
 
 namespace {
 
-constexpr double kPiD = 3.14159265358979323846;
 
 }  // namespace
 

@@ -12,7 +12,6 @@ namespace freqlab {
 
 namespace {
 
-constexpr double kPiD = 3.14159265358979323846;
 constexpr int kHalfAzimuths = 32;
 
 // HG at every g node with the per-node constants hoisted out of the ray loop.

@@ -303,6 +303,43 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     return parts;
 }
 
+vec3 BakeEstimator::point_lights_along(const vec3& o, const vec3& d, double t_max,
+                                       CounterRng& rng, BakeCounters& counters) const {
+    vec3 sum(0.0f);
+    const double t_end = std::min(t_max, media_.exit_distance(o, d));
+    for (const Light& light : scene_.scene().lights) {
+        if (light.type != LightType::Point) continue;
+        const float u = rng.next_float();  // drawn for every point light: streams stay aligned
+        if (!(t_end > 0.0)) continue;
+        // Equiangular sampling (Kulla & Fajardo 2012): t = delta + h tan(theta), theta uniform
+        // between the angles the segment's ends subtend from the light.
+        const glm::dvec3 oc = glm::dvec3(light.position) - glm::dvec3(o);
+        const double delta = glm::dot(oc, glm::dvec3(d));
+        const double h = glm::length(oc - delta * glm::dvec3(d));
+        if (h < 1e-9) continue;  // the light on the ray's line: a set of measure zero
+        const double theta_a = std::atan2(-delta, h);
+        const double theta_b = std::isfinite(t_end) ? std::atan2(t_end - delta, h) : kPiD / 2;
+        if (!(theta_b > theta_a)) continue;
+        const double theta = theta_a + double(u) * (theta_b - theta_a);
+        const double t = delta + h * std::tan(theta);
+        const double r2 = h * h + (t - delta) * (t - delta);
+        const double pdf = h / ((theta_b - theta_a) * r2);
+        const vec3 x = o + d * float(t);
+        const HomogeneousMedium here = media_.at(x);
+        if (!(here.sigma_s > 0.0)) continue;
+        const vec3 to_light = light.position - x;
+        const double dist = glm::length(to_light);
+        const vec3 l = to_light / float(dist);
+        ++counters.rays;
+        if (scene_.occluded(Ray{x, l, 0.0f, float(dist) * (1.0f - 1e-4f)})) continue;
+        const double w = media_.transmittance(o, d, t) * here.sigma_s *
+                         hg_phase(here.g, glm::dot(l, d)) / r2 *
+                         media_.transmittance(x, l, dist) / pdf;
+        sum += light.intensity * float(w);
+    }
+    return sum;
+}
+
 IrradianceParts BakeEstimator::volume_path(const vec3& p, const vec3& n, CounterRng& rng,
                                            BakeCounters& counters) const {
     IrradianceParts parts;
@@ -334,6 +371,9 @@ IrradianceParts BakeEstimator::volume_path(const vec3& p, const vec3& n, Counter
         ++counters.rays;
         const SurfaceHit hit = scene_.intersect(Ray{pos, dir, 0.0f, INFINITY});
         const double t_max = hit.valid ? double(hit.distance) : kInfinity;
+        if (!media_.empty() && chain < settings_.media_bounces)
+            add(category >= 0 ? category : (chain == 0 ? 1 : 2),
+                throughput * point_lights_along(pos, dir, t_max, rng, counters));
         const MediumCollision c =
             media_.empty() ? MediumCollision{} : media_.sample_collision(pos, dir, t_max, rng);
         if (c.happened) {
@@ -345,6 +385,7 @@ IrradianceParts BakeEstimator::volume_path(const vec3& p, const vec3& n, Counter
             const int cat = category >= 0 ? category : (chain == 1 ? 1 : 2);
             sample_emitters(x, rng, emitters);
             for (const EmitterSample& s : emitters) {
+                if (s.kind == EmitterKind::Point) continue;  // point_lights_along() has them
                 // Light travels along -s.dir, then along -dir after scattering at x.
                 const float phase = float(hg_phase(c.g, glm::dot(s.dir, dir)));
                 ++counters.rays;

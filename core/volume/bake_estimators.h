@@ -12,7 +12,8 @@
 // |            | ZH -> irradiance by the O(N) double product with the clamped cosine (App. 8) |
 // | vpt        | volumetric path tracing of the same quantity: exact free flights and exact  |
 // |            | transmittance through the piecewise-constant media, NEE at every vertex,   |
-// |            | HG phase sampling, Russian roulette after 4 scattering events               |
+// |            | point lights in media by equiangular sampling along every segment, HG phase |
+// |            | sampling, Russian roulette after 4 scattering events                        |
 //
 // Parts: `surface` is light that reached x along a final segment without scattering in it;
 // `single` / `multiple` had one / several scattering events between x and the previous surface
@@ -67,6 +68,11 @@ class BakeEstimator {
                                  CounterRng& rng, BakeCounters& counters) const;
     IrradianceParts volume_path(const vec3& p, const vec3& n, CounterRng& rng,
                                 BakeCounters& counters) const;
+    // Light of the scene's point lights scattered once anywhere on the segment o + t d,
+    // t < t_max, towards o: equiangular sampling, since collision-point NEE to a point light
+    // has infinite variance in a medium (1/r^2 near the light).
+    vec3 point_lights_along(const vec3& o, const vec3& d, double t_max, CounterRng& rng,
+                            BakeCounters& counters) const;
     // Scattered irradiance at (p, n) from an emitter of strength `intensity` seen along `dir`
     // at `distance` (the table's normalisation), through the segment's effective medium.
     void add_scattered(EmitterKind kind, const vec3& intensity, const vec3& dir, double distance,

@@ -164,6 +164,28 @@ ScatteredIrradiance ImpulseIrradiance::area(const At& d, double shift, double co
             0.25 * point_multiple_.lookup(d, 0.0, cos_light) * d.trend_point};
 }
 
+namespace {
+
+// The process-wide store: the 16 most recently built tables, by (impulse tables, key).
+std::shared_ptr<const ImpulseIrradiance> shared(const ImpulseTables& tables, uint64_t key,
+                                                double g, double albedo, int last_bounce) {
+    static std::mutex mutex;
+    static std::vector<std::pair<std::pair<uint64_t, uint64_t>, std::shared_ptr<const ImpulseIrradiance>>> recent;
+    const std::pair<uint64_t, uint64_t> id{tables.point_single().memo_id(), key};
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        for (auto& [k, v] : recent)
+            if (k == id) return v;
+    }
+    auto built = std::make_shared<const ImpulseIrradiance>(tables, g, albedo, last_bounce);
+    std::lock_guard<std::mutex> lock(mutex);
+    recent.emplace_back(id, built);
+    if (recent.size() > 16) recent.erase(recent.begin());
+    return built;
+}
+
+}  // namespace
+
 const ImpulseIrradiance* ImpulseIrradianceCache::get(double g, double albedo,
                                                      int last_bounce) const {
     const double gq = std::round(g * 65536.0) / 65536.0;
@@ -182,7 +204,7 @@ const ImpulseIrradiance* ImpulseIrradianceCache::get(double g, double albedo,
     if (it != entries_.end()) {
         found = it->second.get();
     } else if (entries_.size() < kMaxEntries) {
-        auto entry = std::make_unique<ImpulseIrradiance>(tables_, gq, cq, last_bounce);
+        std::shared_ptr<const ImpulseIrradiance> entry = shared(tables_, key, gq, cq, last_bounce);
         found = entries_.emplace(key, std::move(entry)).first->second.get();
     }
     if (found) last = {id_, key, found};

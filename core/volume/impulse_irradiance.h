@@ -82,7 +82,9 @@ class ImpulseIrradianceCache {
     const ImpulseTables& tables_;
     uint64_t id_ = CollapseMemo::next_owner_id();  // the per-thread front cache's owner
     mutable std::mutex mutex_;
-    mutable std::map<uint64_t, std::unique_ptr<ImpulseIrradiance>> entries_;
+    // This cache's entries (kept alive while it lives); built ones are also kept process-wide
+    // (the 16 most recent), so that a re-bake of the same media builds nothing.
+    mutable std::map<uint64_t, std::shared_ptr<const ImpulseIrradiance>> entries_;
 };
 
 }  // namespace freqlab

@@ -123,6 +123,8 @@ class SingleScatterTable {
     // `collapsed` (bakers): g quantised to 2^-20 and the phase-term sum memoised per g
     // (collapse_memo.h); otherwise the exact sum at g.
     ZhVector single(const HomogeneousMedium& medium, double distance, bool collapsed = false) const;
+    // Identity of the contents (copies share it): what memoised derivations are keyed by.
+    uint64_t memo_id() const { return memo_id_; }
 
   private:
     void pack();

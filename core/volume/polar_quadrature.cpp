@@ -1,5 +1,7 @@
 #include "volume/polar_quadrature.h"
 
+#include "math/types.h"
+
 #include <boost/math/quadrature/gauss.hpp>
 
 #include <algorithm>
@@ -11,7 +13,6 @@ namespace {
 
 std::vector<PolarNode> make_nodes(int panels) {
     using boost::math::quadrature::gauss;
-    constexpr double kPiD = 3.14159265358979323846;
     const auto& x = gauss<double, 12>::abscissa();
     const auto& w = gauss<double, 12>::weights();
     std::vector<PolarNode> out;

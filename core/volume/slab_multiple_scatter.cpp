@@ -12,7 +12,6 @@ namespace freqlab {
 
 namespace {
 
-constexpr double kPiD = 3.14159265358979323846;
 
 // ZhDistanceTable's Catmull-Rom stencil in log depth (its trend is not used here).
 ZhDistanceTable::Stencil depth_stencil(double z) {

@@ -1,0 +1,202 @@
+// `freqlab bench SCENE --study bake`: method B's baker as run time against error (issue
+// "Method B, part 2", acceptance 2-5). In one process, sequentially:
+//   - reference: VPT at --reference-spp (its own seed, so curves are not correlated with it);
+//   - curves: impulse, extinction and VPT baked progressively (1, 2, 4, ... samples), relMSE of
+//     lm_irradiance against the reference over all valid texels after every pass;
+//   - time for VPT to reach impulse's final error (log-log interpolation on its curve) over
+//     impulse's time;
+//   - overhead: impulse over surface bake time at equal samples (median of 3 interleaved runs);
+//   - re-bake: sigma_s of medium 0 scaled by 1.5, then the first pass (1 sample: the first
+//     progressive preview) and the whole re-bake timed, tables untouched.
+// Writes bench_bake.json, bench_bake.csv (every pass of every curve) and
+// bench_bake_time_error.png.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "base/error.h"
+#include "base/file_io.h"
+#include "base/stopwatch.h"
+#include "commands.h"
+#include "image/line_plot.h"
+#include "scene/scene_loader.h"
+#include "settings/settings_group.h"
+#include "volume/impulse_tables.h"
+#include "volume/lightmap_baker.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace freqlab {
+
+namespace {
+
+struct CurvePoint {
+    int samples;
+    double ms, relmse;
+};
+
+double relmse_against(const LightmapBaker& baker, const LightmapBaker& reference) {
+    double sum = 0.0;
+    long texels = 0;
+    for (size_t i = 0; i < baker.lightmaps().size(); ++i) {
+        const LightmapError e =
+            compare_lightmaps(baker.layers(i), reference.layers(i), "lm_irradiance");
+        sum += e.relmse * double(e.texels);
+        texels += e.texels;
+    }
+    return texels > 0 ? sum / double(texels) : 0.0;
+}
+
+std::vector<CurvePoint> curve(LightmapBaker& baker, const LightmapBaker& reference, int max_spp) {
+    std::vector<CurvePoint> points;
+    for (int n = 1; baker.samples() < max_spp; n *= 2) {
+        baker.run_pass(std::min(n, max_spp - baker.samples()));
+        points.push_back({baker.samples(), baker.stats().bake_ms, relmse_against(baker, reference)});
+        std::fprintf(stderr, "  %-10s %6d spp %9.1f ms relMSE %.5f\n", to_string(baker.method()),
+                     baker.samples(), baker.stats().bake_ms, points.back().relmse);
+    }
+    return points;
+}
+
+// Time at which a curve first reaches `target` error: log-log interpolation between passes;
+// negative when it never does.
+double time_to_reach(const std::vector<CurvePoint>& c, double target) {
+    for (size_t i = 0; i < c.size(); ++i) {
+        if (c[i].relmse > target) continue;
+        if (i == 0) return c[0].ms;
+        const double a = std::log(c[i - 1].relmse), b = std::log(c[i].relmse);
+        const double f = (std::log(target) - a) / (b - a);
+        return std::exp(std::log(c[i - 1].ms) + f * (std::log(c[i].ms) - std::log(c[i - 1].ms)));
+    }
+    return -1.0;
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? NAN : v[v.size() / 2];
+}
+
+}  // namespace
+
+int run_bench_bake(const BenchArgs& a) {
+    if (a.out.empty()) throw Error("--out", "", "expected an output directory");
+    BakeSettings settings;
+    SettingsGroup group;
+    group.bind(BakeSettings::schema(), &settings);
+    for (const std::string& s : a.sets) group.apply_assignment(s);
+    const Scene scene = load_scene(a.scene);
+    Media media(scene.media, scene.source);
+    if (media.empty()) throw Error(a.scene, "media", "the bake study needs a scene with media");
+    EmbreeDevice device(0);
+    RayScene rays(scene, device);
+    rays.update(0.0f);
+    const auto t_tables = Clock::now();
+    const ImpulseTables tables = ImpulseTables::cached(kDefaultTableBounces);
+    const double tables_ms = ms_since(t_tables);
+    fs::create_directories(a.out);
+
+    BakeSettings ref_settings = settings;
+    ref_settings.seed = settings.seed + 7919;
+    std::fprintf(stderr, "reference: vpt at %d spp\n", a.reference_spp);
+    LightmapBaker reference(rays, media, nullptr, BakeMethod::Vpt, ref_settings);
+    reference.run_pass(a.reference_spp);
+
+    LightmapBaker impulse(rays, media, &tables, BakeMethod::Impulse, settings);
+    LightmapBaker extinction(rays, media, nullptr, BakeMethod::Extinction, settings);
+    LightmapBaker vpt(rays, media, nullptr, BakeMethod::Vpt, settings);
+    const std::vector<CurvePoint> c_impulse = curve(impulse, reference, a.max_spp);
+    const std::vector<CurvePoint> c_extinction = curve(extinction, reference, a.max_spp);
+    const std::vector<CurvePoint> c_vpt = curve(vpt, reference, a.reference_spp / 4);
+    const double impulse_error = c_impulse.back().relmse, impulse_ms = c_impulse.back().ms;
+    const double vpt_ms = time_to_reach(c_vpt, impulse_error);
+
+    // Overhead at equal samples: surface and impulse interleaved, 3 runs each, medians.
+    BakeSettings equal = settings;
+    equal.spp = a.overhead_spp;
+    std::vector<double> t_surface, t_impulse;
+    for (int run = 0; run < 3; ++run) {
+        LightmapBaker s(rays, media, nullptr, BakeMethod::Surface, equal);
+        s.run();
+        t_surface.push_back(s.stats().bake_ms);
+        LightmapBaker i(rays, media, &tables, BakeMethod::Impulse, equal);
+        i.run();
+        t_impulse.push_back(i.stats().bake_ms);
+    }
+
+    // Re-bake after a sigma_s change: the atlas and tables stay, the sums restart.
+    LightmapBaker rebake(rays, media, &tables, BakeMethod::Impulse, equal);
+    rebake.run();
+    const MediumDesc& d0 = media.desc(0);
+    media.set_coefficients(0, d0.sigma_s * 1.5, d0.sigma_a, d0.g, d0.density_scale);
+    rebake.reset();
+    const auto t0 = Clock::now();
+    rebake.run_pass(1);
+    const double first_pass_ms = ms_since(t0);
+    rebake.run();
+    const double rebake_ms = ms_since(t0);
+
+    long texels = 0;
+    json maps = json::array();
+    for (const ObjectLightmap& m : impulse.lightmaps()) {
+        texels += long(m.count(TexelState::Valid));
+        maps.push_back({{"name", lightmap_name(scene, m)}, {"width", m.width}, {"height", m.height}});
+    }
+    auto curve_json = [](const std::vector<CurvePoint>& c) {
+        json j = json::array();
+        for (const CurvePoint& p : c) j.push_back({{"spp", p.samples}, {"ms", p.ms}, {"relmse", p.relmse}});
+        return j;
+    };
+    const json report = {
+        {"scene", a.scene},
+        {"settings", group.to_json()},
+        {"tables_load_ms", tables_ms},
+        {"texels_valid", texels},
+        {"lightmaps", maps},
+        {"reference", {{"method", "vpt"}, {"spp", a.reference_spp}, {"ms", reference.stats().bake_ms}}},
+        {"impulse", curve_json(c_impulse)},
+        {"extinction", curve_json(c_extinction)},
+        {"vpt", curve_json(c_vpt)},
+        {"impulse_final_relmse", impulse_error},
+        {"extinction_final_relmse", c_extinction.back().relmse},
+        {"vpt_ms_to_impulse_error", vpt_ms},
+        {"vpt_over_impulse_time", vpt_ms > 0 ? vpt_ms / impulse_ms : NAN},
+        {"vpt_reached_impulse_error", vpt_ms > 0},
+        {"overhead", {{"spp", a.overhead_spp},
+                      {"surface_ms_median", median(t_surface)},
+                      {"impulse_ms_median", median(t_impulse)},
+                      {"impulse_over_surface", median(t_impulse) / median(t_surface)}}},
+        {"rebake", {{"change", "sigma_s x 1.5 of " + d0.name},
+                    {"spp", a.overhead_spp},
+                    {"first_pass_ms", first_pass_ms},
+                    {"total_ms", rebake_ms}}}};
+    write_text_atomically(fs::path(a.out) / "bench_bake.json", report.dump(2) + "\n");
+    std::string csv = "method,spp,ms,relmse\n";
+    for (auto [name, c] : {std::pair{"impulse", &c_impulse}, std::pair{"extinction", &c_extinction},
+                           std::pair{"vpt", &c_vpt}})
+        for (const CurvePoint& p : *c)
+            csv += std::string(name) + "," + std::to_string(p.samples) + "," +
+                   std::to_string(p.ms) + "," + std::to_string(p.relmse) + "\n";
+    write_text_atomically(fs::path(a.out) / "bench_bake.csv", csv);
+    LinePlot plot;
+    plot.title = "bake " + fs::path(a.scene).stem().string() + ": relMSE vs time";
+    plot.x_label = "bake time (ms, log)";
+    plot.y_label = "relMSE (log)";
+    plot.log_x = plot.log_y = true;
+    auto series = [](const char* name, vec3 colour, const std::vector<CurvePoint>& c) {
+        PlotSeries s{name, colour, {}, {}};
+        for (const CurvePoint& p : c)
+            if (p.relmse > 0) s.x.push_back(std::max(p.ms, 1e-3)), s.y.push_back(p.relmse);
+        return s;
+    };
+    plot.series = {series("impulse", {1.0f, 0.6f, 0.2f}, c_impulse),
+                   series("extinction", {0.5f, 0.5f, 0.5f}, c_extinction),
+                   series("vpt", {0.3f, 0.6f, 1.0f}, c_vpt)};
+    write_line_plot(fs::path(a.out) / "bench_bake_time_error.png", plot);
+    std::printf("%s\n", report.dump(2).c_str());
+    return 0;
+}
+
+}  // namespace freqlab
