@@ -17,6 +17,7 @@
 #include "settings/settings_group.h"
 #include "volume/impulse_tables.h"
 #include "volume/lightmap_baker.h"
+#include "volume/lightmap_preview.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -179,6 +180,19 @@ int run_bake(const BakeArgs& args) {
         maps.push_back(entry);
     }
     report["lightmaps"] = maps;
+    {
+        // The lightmapped scene from the scene's camera (volume/lightmap_preview.h).
+        const auto [w, h] = parse_size(args.preview_size, "--preview-size");
+        std::vector<LayerSet> baked;
+        for (size_t i = 0; i < baker.lightmaps().size(); ++i) baked.push_back(baker.layers(i));
+        const LayerSet preview =
+            render_lightmap_preview(rays, scene.camera.at(0.0f), w, h, baker.lightmaps(), baked);
+        write_exr(fs::path(args.out) / "preview.exr", preview,
+                  {{"freqlab", "0.1"}, {"scene", args.scene}, {"method", to_string(method)}});
+        DisplayParams display;
+        write_png(fs::path(args.out) / "preview.png", w, h,
+                  layer_to_rgb8(preview, preview.get("color"), display));
+    }
     if (!args.debug_texel.empty())
         print_debug_texel(rays, media, tables.get(), settings, baker, args.debug_texel);
     write_text_atomically(fs::path(args.out) / "stats.json", report.dump(2) + "\n");

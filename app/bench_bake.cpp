@@ -54,7 +54,8 @@ std::vector<CurvePoint> curve(LightmapBaker& baker, const LightmapBaker& referen
     std::vector<CurvePoint> points;
     for (int n = 1; baker.samples() < max_spp; n *= 2) {
         baker.run_pass(std::min(n, max_spp - baker.samples()));
-        points.push_back({baker.samples(), baker.stats().bake_ms, relmse_against(baker, reference)});
+        points.push_back(
+            {baker.samples(), baker.stats().bake_ms, relmse_against(baker, reference)});
         std::fprintf(stderr, "  %-10s %6d spp %9.1f ms relMSE %.5f\n", to_string(baker.method()),
                      baker.samples(), baker.stats().bake_ms, points.back().relmse);
     }
@@ -98,20 +99,24 @@ int run_bench_bake(const BenchArgs& a) {
     const double tables_ms = ms_since(t_tables);
     fs::create_directories(a.out);
 
+    // --reference-spp 0: no reference and no curves (overhead and re-bake only).
+    const bool curves = a.reference_spp > 0;
     BakeSettings ref_settings = settings;
     ref_settings.seed = settings.seed + 7919;
-    std::fprintf(stderr, "reference: vpt at %d spp\n", a.reference_spp);
     LightmapBaker reference(rays, media, nullptr, BakeMethod::Vpt, ref_settings);
-    reference.run_pass(a.reference_spp);
-
     LightmapBaker impulse(rays, media, &tables, BakeMethod::Impulse, settings);
     LightmapBaker extinction(rays, media, nullptr, BakeMethod::Extinction, settings);
     LightmapBaker vpt(rays, media, nullptr, BakeMethod::Vpt, settings);
-    const std::vector<CurvePoint> c_impulse = curve(impulse, reference, a.max_spp);
-    const std::vector<CurvePoint> c_extinction = curve(extinction, reference, a.max_spp);
-    const std::vector<CurvePoint> c_vpt = curve(vpt, reference, a.reference_spp / 4);
+    std::vector<CurvePoint> c_impulse{{0, 0.0, NAN}}, c_extinction{{0, 0.0, NAN}}, c_vpt;
+    if (curves) {
+        std::fprintf(stderr, "reference: vpt at %d spp\n", a.reference_spp);
+        reference.run_pass(a.reference_spp);
+        c_impulse = curve(impulse, reference, a.max_spp);
+        c_extinction = curve(extinction, reference, a.max_spp);
+        c_vpt = curve(vpt, reference, a.reference_spp / 4);
+    }
     const double impulse_error = c_impulse.back().relmse, impulse_ms = c_impulse.back().ms;
-    const double vpt_ms = time_to_reach(c_vpt, impulse_error);
+    const double vpt_ms = curves ? time_to_reach(c_vpt, impulse_error) : -1.0;
 
     // Overhead at equal samples: surface and impulse interleaved, 3 runs each, medians.
     BakeSettings equal = settings;
@@ -142,11 +147,13 @@ int run_bench_bake(const BenchArgs& a) {
     json maps = json::array();
     for (const ObjectLightmap& m : impulse.lightmaps()) {
         texels += long(m.count(TexelState::Valid));
-        maps.push_back({{"name", lightmap_name(scene, m)}, {"width", m.width}, {"height", m.height}});
+        maps.push_back(
+            {{"name", lightmap_name(scene, m)}, {"width", m.width}, {"height", m.height}});
     }
     auto curve_json = [](const std::vector<CurvePoint>& c) {
         json j = json::array();
-        for (const CurvePoint& p : c) j.push_back({{"spp", p.samples}, {"ms", p.ms}, {"relmse", p.relmse}});
+        for (const CurvePoint& p : c)
+            j.push_back({{"spp", p.samples}, {"ms", p.ms}, {"relmse", p.relmse}});
         return j;
     };
     const json report = {
@@ -155,7 +162,8 @@ int run_bench_bake(const BenchArgs& a) {
         {"tables_load_ms", tables_ms},
         {"texels_valid", texels},
         {"lightmaps", maps},
-        {"reference", {{"method", "vpt"}, {"spp", a.reference_spp}, {"ms", reference.stats().bake_ms}}},
+        {"reference",
+         {{"method", "vpt"}, {"spp", a.reference_spp}, {"ms", reference.stats().bake_ms}}},
         {"impulse", curve_json(c_impulse)},
         {"extinction", curve_json(c_extinction)},
         {"vpt", curve_json(c_vpt)},
@@ -164,14 +172,16 @@ int run_bench_bake(const BenchArgs& a) {
         {"vpt_ms_to_impulse_error", vpt_ms},
         {"vpt_over_impulse_time", vpt_ms > 0 ? vpt_ms / impulse_ms : NAN},
         {"vpt_reached_impulse_error", vpt_ms > 0},
-        {"overhead", {{"spp", a.overhead_spp},
-                      {"surface_ms_median", median(t_surface)},
-                      {"impulse_ms_median", median(t_impulse)},
-                      {"impulse_over_surface", median(t_impulse) / median(t_surface)}}},
-        {"rebake", {{"change", "sigma_s x 1.5 of " + d0.name},
-                    {"spp", a.overhead_spp},
-                    {"first_pass_ms", first_pass_ms},
-                    {"total_ms", rebake_ms}}}};
+        {"overhead",
+         {{"spp", a.overhead_spp},
+          {"surface_ms_median", median(t_surface)},
+          {"impulse_ms_median", median(t_impulse)},
+          {"impulse_over_surface", median(t_impulse) / median(t_surface)}}},
+        {"rebake",
+         {{"change", "sigma_s x 1.5 of " + d0.name},
+          {"spp", a.overhead_spp},
+          {"first_pass_ms", first_pass_ms},
+          {"total_ms", rebake_ms}}}};
     write_text_atomically(fs::path(a.out) / "bench_bake.json", report.dump(2) + "\n");
     std::string csv = "method,spp,ms,relmse\n";
     for (auto [name, c] : {std::pair{"impulse", &c_impulse}, std::pair{"extinction", &c_extinction},
@@ -194,7 +204,7 @@ int run_bench_bake(const BenchArgs& a) {
     plot.series = {series("impulse", {1.0f, 0.6f, 0.2f}, c_impulse),
                    series("extinction", {0.5f, 0.5f, 0.5f}, c_extinction),
                    series("vpt", {0.3f, 0.6f, 1.0f}, c_vpt)};
-    write_line_plot(fs::path(a.out) / "bench_bake_time_error.png", plot);
+    if (curves) write_line_plot(fs::path(a.out) / "bench_bake_time_error.png", plot);
     std::printf("%s\n", report.dump(2).c_str());
     return 0;
 }

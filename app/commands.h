@@ -37,8 +37,8 @@ struct BenchArgs {
     int runs = 4;
     std::vector<std::string> sets;
     std::string out = "freqlab-out/bench";
-    std::string frames;    // cache studies: A:B (default: every frame of the scene)
-    int error_every = 10;  // cache studies: RMSE against the reference on every k-th frame
+    std::string frames;        // cache studies: A:B (default: every frame of the scene)
+    int error_every = 10;      // cache studies: RMSE against the reference on every k-th frame
     int reference_spp = 4096;  // bake study: the VPT reference
     int max_spp = 1024;        // bake study: impulse and extinction curves
     int overhead_spp = 64;     // bake study: equal-sample overhead and re-bake
@@ -55,12 +55,14 @@ struct BakeArgs {
     std::string reference;  // a directory of a reference bake: errors per lightmap
     bool compare_surface = false;
     std::string debug_texel;  // [LIGHTMAP:]X,Y
+    std::string preview_size = "640x360";
     bool quiet = false;
     std::string out;
 };
-int run_bake(const BakeArgs& args);          // bake.cpp
+int run_bake(const BakeArgs& args);  // bake.cpp
 int run_bench_cache(const BenchArgs& args);
-int run_bench_bake(const BenchArgs& args);  // study bake (bench_bake.cpp)  // studies cache, cache-ablation (bench_cache.cpp)
+int run_bench_bake(const BenchArgs& args);  // study bake (bench_bake.cpp)  // studies cache,
+                                            // cache-ablation (bench_cache.cpp)
 
 struct FigureArgs {
     std::string input;  // an EXR written by freqlab (or any EXR)

@@ -146,6 +146,8 @@ int main(int argc, char** argv) {
                    "also run a surface bake at equal samples and report the overhead");
     bake->add_option("--debug-texel", bk.debug_texel,
                      "[LIGHTMAP:]X,Y: print the texel and every method's estimate there");
+    bake->add_option("--preview-size", bk.preview_size,
+                     "WxH of preview.exr / preview.png, the lightmapped scene from its camera");
     bake->add_flag("--quiet", bk.quiet, "no progress bar");
     bake->add_option("--out", bk.out, "output directory")->required();
     freqlab::BenchArgs ba;

@@ -28,3 +28,8 @@ shot cache_decisions.png scenes/rotor.json --method cache --warm-from 0 --frame 
      --set frame.width=480 --set frame.height=270 --inspect 230,200 --size 1280x1000
 shot cache_decision_layer.png scenes/truck.json --method cache --warm-from 0 --frame 12 --overlay decision \
      --set frame.width=480 --set frame.height=270 --size 1280x1000
+# Method B: the lightmapped preview of a bake and the in-scattered light alone.
+shot bake_cornell_impulse.png scenes/cornell_fog.json --method impulse --set bake.spp=256 \
+     --set frame.width=480 --set frame.height=360 --size 1280x800
+shot bake_smoke_inscatter.png scenes/smoke_room.json --method impulse --set bake.spp=128 \
+     --set frame.width=480 --set frame.height=360 --overlay lm_inscatter --inspect 240,200 --size 1280x800

@@ -40,6 +40,11 @@ void restart_renderer(Workbench::State& s) {
     s.shown = nullptr;
     s.shown_frame = -1;
     s.error.clear();
+    if (s.bake) {  // method B: the bake job fills results[0]
+        s.renderer.reset();
+        start_bake(s);
+        return;
+    }
     if (s.device) {
         s.renderer = std::make_unique<FrameRenderer>(s.scene, s.config, *s.device);
         s.renderer->keep_cache_details(true);  // the inspector lists cache entries' tuples
@@ -112,6 +117,10 @@ void start_env_bandwidth_job(Workbench::State& s) {
 
 void draw_settings_panel(Workbench::State& s) {
     ImGui::Text("scene: %s", s.scene.name.c_str());
+    if (s.bake) {
+        draw_bake_panel(s);
+        return;
+    }
     int method = int(s.config.method);
     const char* methods = "gbuffer\0mis\0reference\0points\0sparse\0cache\0";
     if (ImGui::Combo("method", &method, methods) && method != int(s.config.method)) {
@@ -216,11 +225,22 @@ void Workbench::reset(const WorkbenchOptions& options) {
     s.error.clear();
     try {
         s.scene = load_scene(options.scene);
-        s.config.method = parse_render_method(options.method);
-        SettingsGroup group = s.config.settings_group();
-        for (const std::string& a : options.settings) group.apply_assignment(a);
-        s.frame = std::clamp(options.frame, 0, s.scene.frame_count - 1);
+        s.bake.reset();
         if (!s.device) s.device = std::make_unique<EmbreeDevice>(0);
+        if (is_bake_method(options.method)) {
+            // frame.* settings (the preview's size) go to the render config, bake.* to the bake.
+            std::vector<std::string> bake_sets, frame_sets;
+            for (const std::string& a : options.settings)
+                (a.rfind("bake.", 0) == 0 ? bake_sets : frame_sets).push_back(a);
+            SettingsGroup group = s.config.settings_group();
+            for (const std::string& a : frame_sets) group.apply_assignment(a);
+            make_bake_session(s, options.method, bake_sets);
+        } else {
+            s.config.method = parse_render_method(options.method);
+            SettingsGroup group = s.config.settings_group();
+            for (const std::string& a : options.settings) group.apply_assignment(a);
+        }
+        s.frame = std::clamp(options.frame, 0, s.scene.frame_count - 1);
         restart_renderer(s);
     } catch (const Error& e) {
         s.error = e.what();
@@ -231,6 +251,7 @@ void Workbench::reset(const WorkbenchOptions& options) {
 }
 
 Workbench::~Workbench() {
+    s_->bake.reset();
     s_->job.reset();
     s_->reference_job.reset();
 }
@@ -332,6 +353,8 @@ void Workbench::apply_setting(const std::string& assignment) {
 }
 
 bool Workbench::frame_shown() const {
+    // A bake is shown once its last pass is (earlier passes are progressive previews).
+    if (bake_busy(*s_)) return !s_->error.empty();
     const bool env_view = s_->show_env_bandwidth && s_->shown && s_->shown->frame == -100;
     return (s_->shown && (s_->shown->frame == s_->frame || env_view) && !s_->view_dirty) ||
            !s_->error.empty();
@@ -339,6 +362,7 @@ bool Workbench::frame_shown() const {
 
 void Workbench::wait_for_render() {
     if (s_->job) s_->job->wait();
+    wait_for_bake(*s_);
 }
 
 const LayerSet* Workbench::layers() const {

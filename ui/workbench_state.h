@@ -18,9 +18,17 @@
 #include "render/frame_renderer.h"
 #include "scene/scene.h"
 #include "tables_panel.h"
+#include "volume/lightmap_baker.h"
 #include "workbench.h"
 
 namespace freqlab::ui {
+
+// Method B's bake in the workbench (workbench_bake.cpp).
+struct BakeSession;
+struct BakeSessionDeleter {
+    void operator()(BakeSession* b) const;  // cancels and joins its job first
+};
+using BakeSessionPtr = std::unique_ptr<BakeSession, BakeSessionDeleter>;
 
 struct Workbench::State {
     WorkbenchOptions options;
@@ -77,7 +85,17 @@ struct Workbench::State {
     std::unique_ptr<Job> env_bandwidth_job;
     std::unique_ptr<FrameResult> env_bandwidth;  // guarded by results_mutex
     std::string session_path = "freqlab-out/session.json";
+    BakeSessionPtr bake;  // set when the method is a bake method (surface ... vpt)
 };
+
+bool is_bake_method(const std::string& name);
+// Throws Error on a bad bake setting; needs s.scene and s.device.
+void make_bake_session(Workbench::State& s, const std::string& method,
+                       const std::vector<std::string>& assignments);
+void start_bake(Workbench::State& s);
+bool bake_busy(const Workbench::State& s);
+void wait_for_bake(Workbench::State& s);
+void draw_bake_panel(Workbench::State& s);
 
 void restart_renderer(Workbench::State& s);
 // Compare, exports and sessions (workbench_tools.cpp).

@@ -303,8 +303,8 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     return parts;
 }
 
-vec3 BakeEstimator::point_lights_along(const vec3& o, const vec3& d, double t_max,
-                                       CounterRng& rng, BakeCounters& counters) const {
+vec3 BakeEstimator::point_lights_along(const vec3& o, const vec3& d, double t_max, CounterRng& rng,
+                                       BakeCounters& counters) const {
     vec3 sum(0.0f);
     const double t_end = std::min(t_max, media_.exit_distance(o, d));
     for (const Light& light : scene_.scene().lights) {
@@ -333,8 +333,8 @@ vec3 BakeEstimator::point_lights_along(const vec3& o, const vec3& d, double t_ma
         ++counters.rays;
         if (scene_.occluded(Ray{x, l, 0.0f, float(dist) * (1.0f - 1e-4f)})) continue;
         const double w = media_.transmittance(o, d, t) * here.sigma_s *
-                         hg_phase(here.g, glm::dot(l, d)) / r2 *
-                         media_.transmittance(x, l, dist) / pdf;
+                         hg_phase(here.g, glm::dot(l, d)) / r2 * media_.transmittance(x, l, dist) /
+                         pdf;
         sum += light.intensity * float(w);
     }
     return sum;

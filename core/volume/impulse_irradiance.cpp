@@ -167,10 +167,12 @@ ScatteredIrradiance ImpulseIrradiance::area(const At& d, double shift, double co
 namespace {
 
 // The process-wide store: the 16 most recently built tables, by (impulse tables, key).
-std::shared_ptr<const ImpulseIrradiance> shared(const ImpulseTables& tables, uint64_t key,
-                                                double g, double albedo, int last_bounce) {
+std::shared_ptr<const ImpulseIrradiance> shared(const ImpulseTables& tables, uint64_t key, double g,
+                                                double albedo, int last_bounce) {
     static std::mutex mutex;
-    static std::vector<std::pair<std::pair<uint64_t, uint64_t>, std::shared_ptr<const ImpulseIrradiance>>> recent;
+    static std::vector<
+        std::pair<std::pair<uint64_t, uint64_t>, std::shared_ptr<const ImpulseIrradiance>>>
+        recent;
     const std::pair<uint64_t, uint64_t> id{tables.point_single().memo_id(), key};
     {
         std::lock_guard<std::mutex> lock(mutex);

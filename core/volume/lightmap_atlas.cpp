@@ -177,15 +177,18 @@ std::vector<ObjectLightmap> build_lightmaps(const RayScene& rs, const AtlasSetti
         map.charts = int(charts.size());
         map.texel_density = density;
         map.texels.resize(size_t(size.x) * size.y);
+        map.triangle_uv.resize(mesh.triangles.size() * 3);
         const Material& material = scene.materials[obj.material];
         tbb::parallel_for(size_t(0), charts.size(), [&](size_t ci) {
             const Chart& c = charts[ci];
             for (int t : c.triangles) {
                 const uvec3 tri = mesh.triangles[size_t(t)];
                 vec2 q[3];
-                for (int k = 0; k < 3; ++k)
+                for (int k = 0; k < 3; ++k) {
                     q[k] = (project(world[tri[k]], c.axis) - c.lo) * density +
                            vec2(float(settings.padding) + 0.5f);
+                    map.triangle_uv[size_t(t) * 3 + size_t(k)] = q[k] + vec2(c.x, c.y);
+                }
                 const vec2 lo = glm::min(q[0], glm::min(q[1], q[2]));
                 const vec2 hi = glm::max(q[0], glm::max(q[1], q[2]));
                 const float area =

@@ -41,6 +41,9 @@ struct ObjectLightmap {
     int charts = 0;
     float texel_density = 0.0f;         // after any reduction to fit max_size
     std::vector<LightmapTexel> texels;  // row-major from the top row
+    // Lightmap coordinates (texels, continuous: texel i spans [i, i+1)) of each triangle's
+    // three corners, 3 per triangle of the object's mesh: what lookups at a surface point use.
+    std::vector<vec2> triangle_uv;
     size_t count(TexelState s) const;
 };
 

@@ -1,0 +1,196 @@
+// Method B in the workbench: a lightmap bake as a progressive background job whose every pass
+// lands in the viewport as the lightmapped scene (volume/lightmap_preview.h) with its layers;
+// media sliders that re-bake without re-tabulating (Media::set_coefficients, LightmapBaker::
+// reset), bake settings from their declaration, and an orbit of the preview camera.
+#include <imgui.h>
+
+#include <algorithm>
+
+#include "base/error.h"
+#include "base/stopwatch.h"
+#include "settings_panel.h"
+#include "volume/impulse_tables.h"
+#include "volume/lightmap_preview.h"
+#include "workbench_state.h"
+
+namespace freqlab::ui {
+
+struct BakeSession {
+    BakeMethod method = BakeMethod::Impulse;
+    BakeSettings settings;
+    std::unique_ptr<Media> media;
+    std::unique_ptr<RayScene> rays;
+    std::unique_ptr<ImpulseTables> tables;  // loaded by the first impulse job (media only)
+    std::unique_ptr<LightmapBaker> baker;   // rebuilt when the atlas or method changes
+    bool baker_dirty = true;
+    std::unique_ptr<Job> job;
+    float yaw = 0.0f, pitch = 0.0f, zoom = 1.0f;
+    std::vector<LayerSet> baked;  // the last pass's lightmaps (guarded by results_mutex)
+    double first_pass_ms = -1.0;  // since the last (re)start: the first preview's latency
+};
+
+void BakeSessionDeleter::operator()(BakeSession* b) const {
+    if (b) b->job.reset();  // cancels and joins before anything it uses goes
+    delete b;
+}
+
+bool is_bake_method(const std::string& name) {
+    return name == "surface" || name == "extinction" || name == "impulse" || name == "vpt";
+}
+
+void make_bake_session(Workbench::State& s, const std::string& method,
+                       const std::vector<std::string>& assignments) {
+    BakeSessionPtr b(new BakeSession);
+    b->method = parse_bake_method(method);
+    SettingsGroup group;
+    group.bind(BakeSettings::schema(), &b->settings);
+    for (const std::string& a : assignments) group.apply_assignment(a);
+    b->media = std::make_unique<Media>(s.scene.media, s.scene.source);
+    b->rays = std::make_unique<RayScene>(s.scene, *s.device);
+    b->rays->update(0.0f);
+    s.bake = std::move(b);
+}
+
+namespace {
+
+FrameResult preview_result(const Workbench::State& s, const BakeSession& b,
+                           const std::vector<LayerSet>& baked) {
+    FrameResult r;
+    r.frame = 0;
+    const CameraPose pose = orbit_pose(s.scene.camera.at(0.0f), b.yaw, b.pitch, b.zoom);
+    r.layers = render_lightmap_preview(*b.rays, pose, s.config.frame.width, s.config.frame.height,
+                                       b.baker->lightmaps(), baked);
+    const BakeStats& st = b.baker->stats();
+    r.stats = {{"frame", 0},
+               {"time_ms", st.bake_ms},
+               {"rays", st.rays},
+               {"pixels_shaded", st.texels_valid},
+               {"spp", st.samples},
+               {"impulse_queries", st.impulse_queries},
+               {"nonfinite", st.guarded}};
+    return r;
+}
+
+}  // namespace
+
+void start_bake(Workbench::State& s) {
+    BakeSession& b = *s.bake;
+    b.job.reset();
+    b.first_pass_ms = -1.0;
+    Workbench::State* sp = &s;
+    b.job = std::make_unique<Job>([sp](Progress& progress) {
+        BakeSession& bk = *sp->bake;
+        const auto t0 = Clock::now();
+        const bool needs_tables = bk.method == BakeMethod::Impulse && !bk.media->empty();
+        if (needs_tables && !bk.tables) {
+            progress.begin_stage("impulse tables", 1);
+            bk.tables = std::make_unique<ImpulseTables>(ImpulseTables::cached(30));
+        }
+        if (!bk.baker || bk.baker_dirty) {
+            progress.begin_stage("lightmap atlases", 1);
+            bk.baker = std::make_unique<LightmapBaker>(*bk.rays, *bk.media, bk.tables.get(),
+                                                       bk.method, bk.settings);
+            bk.baker_dirty = false;
+        } else {
+            bk.baker->reset();
+        }
+        int passes = 0;
+        for (int n = 1, done = 0; done < bk.settings.spp; n *= 2, ++passes)
+            done += std::min(n, bk.settings.spp - done);
+        progress.set_stage_count(std::max(1, passes));
+        for (int n = 1; bk.baker->samples() < bk.settings.spp; n *= 2) {
+            bk.baker->run_pass(std::min(n, bk.settings.spp - bk.baker->samples()), &progress);
+            std::vector<LayerSet> baked;
+            for (size_t i = 0; i < bk.baker->lightmaps().size(); ++i)
+                baked.push_back(bk.baker->layers(i));
+            FrameResult r = preview_result(*sp, bk, baked);
+            std::lock_guard<std::mutex> lock(sp->results_mutex);
+            if (bk.first_pass_ms < 0.0) bk.first_pass_ms = ms_since(t0);
+            bk.baked = std::move(baked);
+            sp->results[0] = std::move(r);
+            sp->view_dirty = true;
+        }
+    });
+}
+
+bool bake_busy(const Workbench::State& s) {
+    return s.bake && s.bake->job && !s.bake->job->done();
+}
+
+void wait_for_bake(Workbench::State& s) {
+    if (s.bake && s.bake->job) s.bake->job->wait();
+}
+
+void draw_bake_panel(Workbench::State& s) {
+    BakeSession& b = *s.bake;
+    if (b.job && b.job->done()) {
+        const ProgressSnapshot snap = b.job->snapshot();
+        if (!snap.error.empty()) s.error = snap.error;
+    }
+    bool restart = false;
+    int method = int(b.method);
+    if (ImGui::Combo("bake method", &method, "surface\0extinction\0impulse\0vpt\0") &&
+        method != int(b.method)) {
+        b.job.reset();
+        b.method = BakeMethod(method);
+        b.baker_dirty = true;
+        restart = true;
+    }
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip(
+            "surface: media ignored; extinction: transmittance on every segment; impulse: "
+            "plus the tables' scattered light (method B); vpt: volumetric path tracing (the "
+            "ground truth)");
+    if (ImGui::CollapsingHeader("Media", ImGuiTreeNodeFlags_DefaultOpen)) {
+        if (b.media->empty()) ImGui::TextDisabled("no media: the tables are never loaded");
+        for (size_t i = 0; i < b.media->size(); ++i) {
+            const MediumDesc& d = b.media->desc(i);
+            float sigma_s = float(d.sigma_s), sigma_a = float(d.sigma_a), g = float(d.g),
+                  scale = float(d.density_scale);
+            ImGui::PushID(int(i));
+            ImGui::Text("%s (%s)", d.name.c_str(), to_string(d.density));
+            bool changed = false;
+            changed |= ImGui::SliderFloat("sigma_s", &sigma_s, 0.0f, 20.0f, "%.3f",
+                                          ImGuiSliderFlags_Logarithmic);
+            changed |= ImGui::SliderFloat("sigma_a", &sigma_a, 0.0f, 5.0f, "%.3f",
+                                          ImGuiSliderFlags_Logarithmic);
+            changed |= ImGui::SliderFloat("g", &g, -0.95f, 0.95f, "%.2f");
+            changed |= ImGui::SliderFloat("density scale", &scale, 0.0f, 10.0f, "%.2f",
+                                          ImGuiSliderFlags_Logarithmic);
+            if (changed) {
+                b.job.reset();  // the job reads the media: stop it before they change
+                b.media->set_coefficients(i, sigma_s, sigma_a, g, scale);
+                restart = true;
+            }
+            ImGui::PopID();
+        }
+    }
+    if (ImGui::CollapsingHeader("Preview camera")) {
+        bool moved = ImGui::SliderFloat("yaw", &b.yaw, -180.0f, 180.0f, "%.0f deg");
+        moved |= ImGui::SliderFloat("pitch", &b.pitch, -60.0f, 60.0f, "%.0f deg");
+        moved |= ImGui::SliderFloat("zoom", &b.zoom, 0.3f, 4.0f, "%.2f");
+        if (moved && !bake_busy(s) && b.baker) {
+            std::lock_guard<std::mutex> lock(s.results_mutex);
+            s.results[0] = preview_result(s, b, b.baked);
+            s.view_dirty = true;
+        }
+    }
+    SettingsGroup group;
+    group.bind(BakeSettings::schema(), &b.settings);
+    if (draw_settings(group, true) & kInvalidatesBake) {
+        // The atlas and the estimator's copy of the settings live in the baker. (The job
+        // reads b.settings: a change while it runs is picked up by the restart below.)
+        b.job.reset();
+        b.baker_dirty = true;
+        restart = true;
+    }
+    if (b.baker) {
+        const BakeStats& st = b.baker->stats();
+        ImGui::Text("%d / %d spp, %ld texels, %.0f ms", b.baker->samples(), b.settings.spp,
+                    st.texels_valid, st.bake_ms);
+        if (b.first_pass_ms >= 0.0) ImGui::Text("first preview after %.0f ms", b.first_pass_ms);
+    }
+    if (restart) start_bake(s);
+}
+
+}  // namespace freqlab::ui
