@@ -180,6 +180,11 @@ int run_bake(const BakeArgs& args) {
         maps.push_back(entry);
     }
     report["lightmaps"] = maps;
+    if (!baker.probes().empty()) {
+        write_text_atomically(fs::path(args.out) / "probes.json",
+                              baker.probes_json().dump(1) + "\n");
+        report["probes"] = long(baker.probes().size());
+    }
     {
         // The lightmapped scene from the scene's camera (volume/lightmap_preview.h).
         const auto [w, h] = parse_size(args.preview_size, "--preview-size");

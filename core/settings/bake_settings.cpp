@@ -36,6 +36,12 @@ const SettingsSchema& BakeSettings::schema() {
                    "Impulse: tabulate the ZH x clamped-cosine double product once per medium over "
                    "distance and cosine (one lookup per segment); off queries the tables and "
                    "integrates per segment.")
+            .field(&BakeSettings::probes_x, "probes_x", 0, 64, "", kInvalidatesBake,
+                   "Light probes along x (order-3 SH of incident radiance; 0: no probes).")
+            .field(&BakeSettings::probes_y, "probes_y", 0, 64, "", kInvalidatesBake,
+                   "Light probes along y.")
+            .field(&BakeSettings::probes_z, "probes_z", 0, 64, "", kInvalidatesBake,
+                   "Light probes along z.")
             .field(&BakeSettings::seed, "seed", 0, 1 << 30, "", kInvalidatesBake,
                    "Random seed of the bake (results never depend on the thread count).")
             .build();

@@ -24,6 +24,8 @@ struct BakeSettings {
     bool tabulated_irradiance = true;  // impulse: double products tabulated per medium  // rings of
                                        // texels filled around charts after a bake
     int seed = 0;
+    // Light probes: a grid over the scene's bounds shrunk by 10 % (0 on any axis: none).
+    int probes_x = 4, probes_y = 4, probes_z = 3;
     static const SettingsSchema& schema();
 };
 

@@ -10,10 +10,7 @@
 
 namespace freqlab {
 
-namespace {
-
-
-}  // namespace
+namespace {}  // namespace
 
 ShVector area_single_sh(const HomogeneousMedium& m, double d, double alpha) {
     using boost::math::quadrature::gauss;

@@ -59,16 +59,6 @@ BakeMethod parse_bake_method(const std::string& text) {
     throw Error("--method", text, "expected surface, extinction, impulse or vpt");
 }
 
-struct BakeEstimator::EmitterSample {
-    EmitterKind kind = EmitterKind::Point;
-    vec3 dir{0.0f};               // from the receiver towards the emitter, unit
-    double distance = kInfinity;  // to the emitter (infinity: directional, environment)
-    vec3 irradiance{0.0f};        // at normal incidence, before transmittance and visibility
-    vec3 intensity{0.0f};         // the tables' emitter strength (I, E0 or L x area)
-    vec3 emitter_normal{0.0f};    // area emitters
-    double shift = 0.0;           // area emitters: sin(angle of the emitter normal to -dir)
-};
-
 BakeEstimator::BakeEstimator(const RayScene& scene, const Media& media, const ImpulseTables* tables,
                              BakeMethod method, const BakeSettings& settings)
     : scene_(scene), media_(media), tables_(tables), method_(method), settings_(settings) {
@@ -353,14 +343,18 @@ IrradianceParts BakeEstimator::volume_path(const vec3& p, const vec3& n, Counter
             std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
         parts.surface += s.irradiance * cos_x * float(media_.transmittance(p, s.dir, length));
     }
-    // The walk: a cosine-sampled direction (irradiance = pi x radiance), free flights,
-    // scattering in media, diffuse bounces on surfaces.
+    // The walk from a cosine-sampled direction: irradiance = pi x radiance.
     const float u1 = rng.next_float(), u2 = rng.next_float();
     const vec3 local_dir = sample_cosine_hemisphere(u1, u2);
     if (local_dir.z <= 1e-6f) return parts;
-    vec3 dir = Frame(n).to_world(local_dir);
-    vec3 pos = origin(p, n);
-    vec3 throughput(kPi);
+    parts += walk(origin(p, n), Frame(n).to_world(local_dir), vec3(kPi), rng, counters);
+    return parts;
+}
+
+IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, CounterRng& rng,
+                                    BakeCounters& counters) const {
+    IrradianceParts parts;
+    std::vector<EmitterSample> emitters;
     int chain = 0;      // scattering events since the last surface vertex
     int category = -1;  // fixed at the first surface vertex: 0 surface, 1 single, 2 multiple
     int surface_vertices = 0, events = 0;

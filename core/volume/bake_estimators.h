@@ -22,6 +22,9 @@
 // texture (a lightmap stores view-independent light); mirrors reflect nothing here.
 #pragma once
 
+#include <array>
+#include <limits>
+
 #include "accel/ray_scene.h"
 #include "math/rng.h"
 #include "settings/bake_settings.h"
@@ -61,13 +64,31 @@ class BakeEstimator {
     IrradianceParts estimate(const vec3& p, const vec3& n, const vec3& albedo, CounterRng& rng,
                              BakeCounters& counters) const;
 
+    // Incident radiance at a probe p as order-3 SH (9 RGB coefficients per part): one path.
+    struct ProbeParts {
+        std::array<vec3, 9> surface{}, single{}, multiple{};
+    };
+    ProbeParts estimate_probe(const vec3& p, CounterRng& rng, BakeCounters& counters) const;
+
   private:
-    struct EmitterSample;
+    struct EmitterSample {
+        EmitterKind kind = EmitterKind::Point;
+        vec3 dir{0.0f};  // from the receiver towards the emitter, unit
+        double distance = std::numeric_limits<double>::infinity();  // infinity: distant
+        vec3 irradiance{0.0f};      // at normal incidence, before transmittance and visibility
+        vec3 intensity{0.0f};       // the tables' emitter strength (I, E0 or L x area)
+        vec3 emitter_normal{0.0f};  // area emitters
+        double shift = 0.0;         // area emitters: sin(angle of the emitter normal to -dir)
+    };
     void sample_emitters(const vec3& p, CounterRng& rng, std::vector<EmitterSample>& out) const;
     IrradianceParts surface_path(const vec3& p, const vec3& n, const vec3& albedo, int depth,
                                  CounterRng& rng, BakeCounters& counters) const;
     IrradianceParts volume_path(const vec3& p, const vec3& n, CounterRng& rng,
                                 BakeCounters& counters) const;
+    // VPT's random walk from pos along dir: free flights, scattering in media (NEE, HG),
+    // diffuse bounces on surfaces; what arrives back at pos, times `throughput`.
+    IrradianceParts walk(vec3 pos, vec3 dir, vec3 throughput, CounterRng& rng,
+                         BakeCounters& counters) const;
     // Light of the scene's point lights scattered once anywhere on the segment o + t d,
     // t < t_max, towards o: equiangular sampling, since collision-point NEE to a point light
     // has infinite variance in a medium (1/r^2 near the light).

@@ -14,7 +14,6 @@ namespace freqlab {
 
 namespace {
 
-
 // y_l^0 for every l at once (math/sh.h's Legendre recurrence).
 void zh_basis_all(double cos_theta, double* y) {
     legendre(kImpulseOrder, cos_theta, y);

@@ -39,6 +39,17 @@ LightmapBaker::LightmapBaker(const RayScene& scene, const Media& media, const Im
     atlas.backface_tolerance = settings.backface_tolerance;
     maps_ = build_lightmaps(scene, atlas);
     stats_.atlas_ms = ms_since(t0);
+    if (settings.probes_x > 0 && settings.probes_y > 0 && settings.probes_z > 0) {
+        const vec3 lo = scene.bounds_min(), hi = scene.bounds_max();
+        const vec3 centre = 0.5f * (lo + hi), half = 0.45f * (hi - lo);
+        const ivec3 n(settings.probes_x, settings.probes_y, settings.probes_z);
+        for (int z = 0; z < n.z; ++z)
+            for (int y = 0; y < n.y; ++y)
+                for (int x = 0; x < n.x; ++x) {
+                    const vec3 f = (vec3(x, y, z) + 0.5f) / vec3(n) * 2.0f - 1.0f;
+                    probe_positions_.push_back(centre + f * half);
+                }
+    }
     for (const ObjectLightmap& m : maps_) {
         stats_.texels_total += long(m.texels.size());
         stats_.texels_valid += long(m.count(TexelState::Valid));
@@ -50,6 +61,7 @@ LightmapBaker::LightmapBaker(const RayScene& scene, const Media& media, const Im
 void LightmapBaker::reset() {
     sums_.assign(maps_.size(), {});
     for (size_t i = 0; i < maps_.size(); ++i) sums_[i].assign(maps_[i].texels.size(), {});
+    probe_sums_.assign(probe_positions_.size(), {});
     samples_ = 0;
     stats_.bake_ms = 0.0;
     stats_.rays = stats_.impulse_queries = stats_.guarded = 0;
@@ -86,6 +98,34 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
             if (progress) progress->advance();
         });
     }
+    // Probes: keyed after the lightmaps (index maps_.size()).
+    tbb::parallel_for(size_t(0), probe_positions_.size(), [&](size_t i) {
+        BakeCounters counters;
+        for (int s = first; s < first + samples; ++s) {
+            CounterRng rng(uint64_t(settings_.seed), maps_.size(), i, uint64_t(s));
+            const BakeEstimator::ProbeParts p =
+                estimator_.estimate_probe(probe_positions_[i], rng, counters);
+            bool finite = true;
+            for (int k = 0; k < 9; ++k)
+                finite = finite && std::isfinite(p.surface[size_t(k)].x + p.surface[size_t(k)].y +
+                                                 p.surface[size_t(k)].z + p.single[size_t(k)].x +
+                                                 p.single[size_t(k)].y + p.single[size_t(k)].z +
+                                                 p.multiple[size_t(k)].x + p.multiple[size_t(k)].y +
+                                                 p.multiple[size_t(k)].z);
+            if (!finite) {
+                ++counters.guarded;
+                continue;
+            }
+            for (int k = 0; k < 9; ++k) {
+                probe_sums_[i].surface[size_t(k)] += p.surface[size_t(k)];
+                probe_sums_[i].single[size_t(k)] += p.single[size_t(k)];
+                probe_sums_[i].multiple[size_t(k)] += p.multiple[size_t(k)];
+            }
+        }
+        rays += counters.rays;
+        queries += counters.impulse_queries;
+        guarded += counters.guarded;
+    });
     samples_ += samples;
     stats_.samples = samples_;
     stats_.rays += rays;
@@ -101,6 +141,43 @@ void LightmapBaker::run(Progress* progress) {
     if (progress) progress->set_stage_count(std::max(1, passes));
     for (int n = 1; samples_ < settings_.spp; n *= 2)
         run_pass(std::min(n, settings_.spp - samples_), progress);
+}
+
+std::vector<LightmapBaker::Probe> LightmapBaker::probes() const {
+    std::vector<Probe> out(probe_positions_.size());
+    const float inv = samples_ > 0 ? 1.0f / float(samples_) : 0.0f;
+    for (size_t i = 0; i < out.size(); ++i) {
+        out[i].position = probe_positions_[i];
+        for (size_t k = 0; k < 9; ++k) {
+            out[i].surface[k] = probe_sums_[i].surface[k] * inv;
+            out[i].single[k] = probe_sums_[i].single[k] * inv;
+            out[i].multiple[k] = probe_sums_[i].multiple[k] * inv;
+        }
+    }
+    return out;
+}
+
+nlohmann::json LightmapBaker::probes_json() const {
+    auto coefficients = [](const std::array<vec3, 9>& sh) {
+        nlohmann::json j = nlohmann::json::array();
+        for (const vec3& c : sh) j.push_back({c.x, c.y, c.z});
+        return j;
+    };
+    nlohmann::json list = nlohmann::json::array();
+    for (const Probe& p : probes()) {
+        std::array<vec3, 9> total;
+        for (size_t k = 0; k < 9; ++k) total[k] = p.surface[k] + p.single[k] + p.multiple[k];
+        list.push_back({{"position", {p.position.x, p.position.y, p.position.z}},
+                        {"sh", coefficients(total)},
+                        {"sh_surface", coefficients(p.surface)},
+                        {"sh_inscatter_single", coefficients(p.single)},
+                        {"sh_inscatter_multiple", coefficients(p.multiple)}});
+    }
+    return {{"order", 3},
+            {"basis", "real SH, y_l^m of core/math/sh.h (index l(l+1)+m), incident radiance"},
+            {"grid", {settings_.probes_x, settings_.probes_y, settings_.probes_z}},
+            {"spp", samples_},
+            {"probes", list}};
 }
 
 LayerSet LightmapBaker::layers(size_t mi) const {

@@ -44,6 +44,13 @@ class LightmapBaker {
     void reset();
 
     int samples() const { return samples_; }
+    // Light probes: positions and their mean order-3 SH of incident radiance per part.
+    struct Probe {
+        vec3 position{0.0f};
+        std::array<vec3, 9> surface{}, single{}, multiple{};
+    };
+    std::vector<Probe> probes() const;
+    nlohmann::json probes_json() const;  // grid, order, and per probe position + SH
     const std::vector<ObjectLightmap>& lightmaps() const { return maps_; }
     LayerSet layers(size_t lightmap) const;
     const BakeStats& stats() const { return stats_; }
@@ -57,6 +64,8 @@ class LightmapBaker {
     std::vector<ObjectLightmap> maps_;
     // Per lightmap, per texel: surface, single, multiple (RGB each) summed over samples.
     std::vector<std::vector<IrradianceParts>> sums_;
+    std::vector<vec3> probe_positions_;
+    std::vector<BakeEstimator::ProbeParts> probe_sums_;
     int samples_ = 0;
     BakeStats stats_;
 };

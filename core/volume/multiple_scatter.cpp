@@ -12,10 +12,7 @@
 
 namespace freqlab {
 
-namespace {
-
-
-}  // namespace
+namespace {}  // namespace
 
 double PointMultipleScatter::fluence(int k, double D) const {
     if (!(D > 0) || D >= ZhDistanceTable::kMaxD) return 0.0;

@@ -12,7 +12,6 @@ namespace freqlab {
 
 namespace {
 
-
 // ZhDistanceTable's Catmull-Rom stencil in log depth (its trend is not used here).
 ZhDistanceTable::Stencil depth_stencil(double z) {
     return ZhDistanceTable::stencil(ZhDistanceTable::Trend::DirectionalLike,
