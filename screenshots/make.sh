@@ -33,3 +33,5 @@ shot bake_cornell_impulse.png scenes/cornell_fog.json --method impulse --set bak
      --set frame.width=480 --set frame.height=360 --size 1280x800
 shot bake_smoke_inscatter.png scenes/smoke_room.json --method impulse --set bake.spp=128 \
      --set frame.width=480 --set frame.height=360 --overlay lm_inscatter --inspect 240,200 --size 1280x800
+shot bake_zh_lobes.png scenes/cornell_fog.json --method impulse --set bake.spp=128 \
+     --set frame.width=480 --set frame.height=360 --inspect 150,335 --size 1280x800

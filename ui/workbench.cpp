@@ -312,6 +312,7 @@ void Workbench::draw(int fb_w, int fb_h) {
     ImGui::SetNextWindowSize(ImVec2(fb_w - left_w - right_w, fb_h - bottom_h - menu_h));
     ImGui::Begin("Viewport", nullptr, fixed);
     draw_viewport(s);
+    if (s.bake) draw_probe_lobes(s);
     // Method A's cache: what each frame reused, shaded anew and discarded, under the image.
     if (s.config.method == RenderMethod::Cache && !s.show_env_bandwidth) draw_cache_panel(s);
     ImGui::End();

@@ -8,6 +8,7 @@
 
 #include "base/error.h"
 #include "base/stopwatch.h"
+#include "math/sh.h"
 #include "settings_panel.h"
 #include "volume/impulse_tables.h"
 #include "volume/lightmap_preview.h"
@@ -27,6 +28,8 @@ struct BakeSession {
     float yaw = 0.0f, pitch = 0.0f, zoom = 1.0f;
     std::vector<LayerSet> baked;  // the last pass's lightmaps (guarded by results_mutex)
     double first_pass_ms = -1.0;  // since the last (re)start: the first preview's latency
+    bool show_lobes = true;       // probes' SH lobes over the preview
+    std::vector<LightmapBaker::Probe> probes;  // of the last pass (guarded by results_mutex)
 };
 
 void BakeSessionDeleter::operator()(BakeSession* b) const {
@@ -107,6 +110,7 @@ void start_bake(Workbench::State& s) {
             std::lock_guard<std::mutex> lock(sp->results_mutex);
             if (bk.first_pass_ms < 0.0) bk.first_pass_ms = ms_since(t0);
             bk.baked = std::move(baked);
+            bk.probes = bk.baker->probes();
             sp->results[0] = std::move(r);
             sp->view_dirty = true;
         }
@@ -165,6 +169,12 @@ void draw_bake_panel(Workbench::State& s) {
             ImGui::PopID();
         }
     }
+    ImGui::Checkbox("probe lobes", &b.show_lobes);
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip(
+            "Each light probe's incident radiance (order-3 SH, luminance) drawn as a polar "
+            "curve in the image plane at the probe, scaled to its own maximum: the lobe points "
+            "where light comes from.");
     if (ImGui::CollapsingHeader("Preview camera")) {
         bool moved = ImGui::SliderFloat("yaw", &b.yaw, -180.0f, 180.0f, "%.0f deg");
         moved |= ImGui::SliderFloat("pitch", &b.pitch, -60.0f, 60.0f, "%.0f deg");
@@ -191,6 +201,79 @@ void draw_bake_panel(Workbench::State& s) {
         if (b.first_pass_ms >= 0.0) ImGui::Text("first preview after %.0f ms", b.first_pass_ms);
     }
     if (restart) start_bake(s);
+}
+
+std::vector<std::string> bake_trace(Workbench::State& s, int x, int y) {
+    BakeSession& b = *s.bake;
+    if (!b.baker || !s.shown) return {};
+    const LayerSet& layers = s.shown->layers;
+    const Layer* texel = layers.find("lightmap_texel");
+    if (!texel || x < 0 || y < 0 || x >= layers.width() || y >= layers.height()) return {};
+    const int tx = int(texel->at(layers.width(), x, y, 0)), ty = int(texel->at(layers.width(), x, y, 1));
+    const int m = int(texel->at(layers.width(), x, y, 2));
+    if (m < 0) return {"no lightmap here (background, sphere, mirror or moving object)"};
+    const ObjectLightmap& map = b.baker->lightmaps()[size_t(m)];
+    const LightmapTexel& t = map.texels[size_t(ty) * map.width + tx];
+    std::vector<std::string> lines = {"lightmap " + lightmap_name(s.scene, map) + " texel " +
+                                      std::to_string(tx) + "," + std::to_string(ty) + " (" +
+                                      texel_state_legend()[size_t(t.state)] + ")"};
+    if (t.state != TexelState::Valid) return lines;
+    CounterRng rng(uint64_t(b.settings.seed), 0, size_t(ty) * map.width + tx, 0);
+    for (std::string& l : b.baker->estimator().trace_texel(t.position, t.normal, t.albedo, rng))
+        lines.push_back(std::move(l));
+    return lines;
+}
+
+void draw_probe_lobes(Workbench::State& s) {
+    if (!s.bake || !s.bake->show_lobes || !s.shown) return;
+    BakeSession& b = *s.bake;
+    std::vector<LightmapBaker::Probe> probes;
+    {
+        std::lock_guard<std::mutex> lock(s.results_mutex);
+        probes = b.probes;
+    }
+    if (probes.empty()) return;
+    const int w = s.shown->layers.width(), h = s.shown->layers.height();
+    const CameraPose pose = orbit_pose(s.scene.camera.at(0.0f), b.yaw, b.pitch, b.zoom);
+    const CameraRayGenerator cam(pose, w, h);
+    const ScreenRect& r = s.image_rect;
+    ImDrawList* draw = ImGui::GetWindowDrawList();
+    constexpr int kSteps = 48;
+    // Each probe scaled to its own largest radius (22 px): lobe shapes, whatever the light's
+    // fall-off; the inspector and probes.json have the values.
+    std::vector<std::array<float, kSteps>> radii(probes.size());
+    std::vector<float> largest(probes.size(), 0.0f);
+    for (size_t i = 0; i < probes.size(); ++i)
+        for (int k = 0; k < kSteps; ++k) {
+            const float phi = kTwoPi * k / kSteps;
+            const vec3 d = std::cos(phi) * cam.right + std::sin(phi) * cam.up;
+            double y[9];
+            sh_eval(3, glm::dvec3(d), y);
+            vec3 v(0.0f);
+            for (size_t c = 0; c < 9; ++c)
+                v += float(y[c]) * (probes[i].surface[c] + probes[i].single[c] +
+                                    probes[i].multiple[c]);
+            radii[i][size_t(k)] = std::max(0.0f, luminance(v));
+            largest[i] = std::max(largest[i], radii[i][size_t(k)]);
+        }
+    for (size_t i = 0; i < probes.size(); ++i) {
+        if (!(largest[i] > 0.0f)) continue;
+        const vec3 v = probes[i].position - cam.origin;
+        const float z = glm::dot(v, cam.forward);
+        if (z <= 0.0f) continue;
+        const float xn = glm::dot(v, cam.right) / (z * cam.tan_half_fov * cam.aspect);
+        const float yn = glm::dot(v, cam.up) / (z * cam.tan_half_fov);
+        const float px = r.x0 + (xn + 1.0f) * 0.5f * (r.x1 - r.x0);
+        const float py = r.y0 + (1.0f - yn) * 0.5f * (r.y1 - r.y0);
+        ImVec2 pts[kSteps];
+        for (int k = 0; k < kSteps; ++k) {
+            const float phi = kTwoPi * k / kSteps;
+            const float len = 22.0f * radii[i][size_t(k)] / largest[i];
+            pts[k] = ImVec2(px + len * std::cos(phi), py - len * std::sin(phi));
+        }
+        draw->AddPolyline(pts, kSteps, IM_COL32(255, 170, 60, 230), ImDrawFlags_Closed, 1.5f);
+        draw->AddCircleFilled(ImVec2(px, py), 2.0f, IM_COL32(255, 255, 255, 230));
+    }
 }
 
 }  // namespace freqlab::ui

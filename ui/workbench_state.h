@@ -96,6 +96,10 @@ void start_bake(Workbench::State& s);
 bool bake_busy(const Workbench::State& s);
 void wait_for_bake(Workbench::State& s);
 void draw_bake_panel(Workbench::State& s);
+// The inspector's record of a pixel of the lightmapped preview: its texel's trace.
+std::vector<std::string> bake_trace(Workbench::State& s, int x, int y);
+// Probes' SH lobes over the viewport image (call inside the viewport window).
+void draw_probe_lobes(Workbench::State& s);
 
 void restart_renderer(Workbench::State& s);
 // Compare, exports and sessions (workbench_tools.cpp).

@@ -23,6 +23,8 @@
 #pragma once
 
 #include <array>
+#include <string>
+#include <vector>
 #include <limits>
 
 #include "accel/ray_scene.h"
@@ -69,6 +71,12 @@ class BakeEstimator {
         std::array<vec3, 9> surface{}, single{}, multiple{};
     };
     ProbeParts estimate_probe(const vec3& p, CounterRng& rng, BakeCounters& counters) const;
+
+    // One texel's record as text: every emitter sample with its segment (length, optical
+    // thicknesses, transmittance, effective medium) and, for impulse, the ZH components of
+    // its response (order 11, about the axis to the emitter) and the irradiance they give.
+    std::vector<std::string> trace_texel(const vec3& p, const vec3& n, const vec3& albedo,
+                                         CounterRng& rng) const;
 
   private:
     struct EmitterSample {

@@ -55,6 +55,7 @@ class LightmapBaker {
     LayerSet layers(size_t lightmap) const;
     const BakeStats& stats() const { return stats_; }
     BakeMethod method() const { return method_; }
+    const BakeEstimator& estimator() const { return estimator_; }
 
   private:
     const RayScene& scene_;

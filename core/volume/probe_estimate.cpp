@@ -11,6 +11,7 @@
 // |           | axis (Eq. 3.13); probes float in space, so the infinite-medium tables        |
 // | vpt       | direct light attenuated exactly, then VPT's walk from a uniform direction      |
 #include <cmath>
+#include <cstdio>
 
 #include "math/sampling.h"
 #include "math/sh.h"
@@ -116,6 +117,66 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
                   std::sqrt(std::max(0.0f, 1.0f - cos_y * cos_y)), hit.shading_normal, optics);
     }
     return out;
+}
+
+std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n,
+                                                    const vec3& albedo, CounterRng& rng) const {
+    std::vector<std::string> lines;
+    char buf[512];
+    auto line = [&](const char* fmt, auto... args) {
+        std::snprintf(buf, sizeof buf, fmt, args...);
+        lines.emplace_back(buf);
+    };
+    line("method %s at (%.3f, %.3f, %.3f), n (%.2f, %.2f, %.2f), albedo %.3f", to_string(method_),
+         p.x, p.y, p.z, n.x, n.y, n.z, luminance(albedo));
+    const char* kinds[] = {"point", "directional", "area"};
+    std::vector<EmitterSample> emitters;
+    sample_emitters(p, rng, emitters);
+    BakeCounters counters;
+    for (size_t i = 0; i < emitters.size(); ++i) {
+        const EmitterSample& s = emitters[i];
+        const float cos_x = glm::dot(n, s.dir);
+        const bool vis = visible(p, n, s.dir, s.distance, counters);
+        const double length =
+            std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
+        const SegmentOptics o = media_.integrate(p, s.dir, length);
+        const HomogeneousMedium m = o.effective();
+        line("emitter %zu (%s): dir (%.2f, %.2f, %.2f), cos %.3f, %s", i, kinds[int(s.kind)],
+             s.dir.x, s.dir.y, s.dir.z, cos_x, vis ? "visible" : "occluded");
+        line("  segment %.3f in media: tau_s %.4f tau_a %.4f T %.4f; effective sigma_s %.4f "
+             "sigma_a %.4f g %.3f",
+             std::isfinite(length) ? length : -1.0, o.tau_s, o.tau_a, o.transmittance(),
+             m.sigma_s, m.sigma_a, m.g);
+        line("  direct irradiance %.5g (x T for extinction, impulse and vpt)",
+             double(luminance(s.irradiance)) * std::max(0.0f, cos_x));
+        if (!tables_ || !(m.sigma_s > 0.0) || !vis) continue;
+        ImpulseQuery q;
+        q.emitter = s.kind;
+        q.distance = std::isfinite(s.distance) ? s.distance : length;
+        q.shift = s.shift;
+        q.medium = m;
+        q.medium.g = std::clamp(m.g, -kGRange, kGRange);
+        q.last_bounce = std::min(settings_.media_bounces, table_bounces_);
+        if (!(q.distance > 0.0) || m.sigma_t() * q.distance > ZhDistanceTable::kMaxD) continue;
+        const ImpulseResponse r = query_impulse(*tables_, q);
+        for (const auto& [name, zh] : {std::pair{"single  ", &r.single},
+                                       std::pair{"multiple", &r.multiple}}) {
+            std::string coeffs;
+            for (double v : *zh) {
+                std::snprintf(buf, sizeof buf, " %.3e", v);
+                coeffs += buf;
+            }
+            line("  ZH %s x I%s", name, coeffs.c_str());
+        }
+        if (s.kind == EmitterKind::Area) line("  single lobe tilted %.2f deg", r.axis_tilt * 57.2958);
+        IrradianceParts e;
+        add_scattered(s.kind, s.intensity, s.dir, q.distance, s.shift, s.emitter_normal, o, n,
+                      luminance(albedo), e, counters);
+        line("  scattered irradiance: single %.5g, multiple %.5g", double(luminance(e.single)),
+             double(luminance(e.multiple)));
+    }
+    (void)albedo;
+    return lines;
 }
 
 }  // namespace freqlab
