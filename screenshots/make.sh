@@ -35,3 +35,5 @@ shot bake_smoke_inscatter.png scenes/smoke_room.json --method impulse --set bake
      --set frame.width=480 --set frame.height=360 --overlay lm_inscatter --inspect 240,200 --size 1280x800
 shot bake_zh_lobes.png scenes/cornell_fog.json --method impulse --set bake.spp=128 \
      --set frame.width=480 --set frame.height=360 --inspect 150,335 --size 1280x800
+shot bake_split_vpt.png scenes/cornell_fog.json --method impulse --set bake.spp=64 \
+     --set frame.width=480 --set frame.height=360 --compare --size 1280x900

@@ -119,6 +119,7 @@ void draw_settings_panel(Workbench::State& s) {
     ImGui::Text("scene: %s", s.scene.name.c_str());
     if (s.bake) {
         draw_bake_panel(s);
+        draw_compare_panel(s);  // against a VPT bake (workbench_bake.cpp)
         return;
     }
     int method = int(s.config.method);

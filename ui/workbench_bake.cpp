@@ -111,6 +111,7 @@ void start_bake(Workbench::State& s) {
             if (bk.first_pass_ms < 0.0) bk.first_pass_ms = ms_since(t0);
             bk.baked = std::move(baked);
             bk.probes = bk.baker->probes();
+            attach_reference(*sp, 0);  // a VPT comparison made earlier stays attached
             sp->results[0] = std::move(r);
             sp->view_dirty = true;
         }
@@ -135,6 +136,7 @@ void draw_bake_panel(Workbench::State& s) {
     int method = int(b.method);
     if (ImGui::Combo("bake method", &method, "surface\0extinction\0impulse\0vpt\0") &&
         method != int(b.method)) {
+        s.reference_job.reset();
         b.job.reset();
         b.method = BakeMethod(method);
         b.baker_dirty = true;
@@ -162,7 +164,8 @@ void draw_bake_panel(Workbench::State& s) {
             changed |= ImGui::SliderFloat("density scale", &scale, 0.0f, 10.0f, "%.2f",
                                           ImGuiSliderFlags_Logarithmic);
             if (changed) {
-                b.job.reset();  // the job reads the media: stop it before they change
+                s.reference_job.reset();  // the jobs read the media: stop them first
+                b.job.reset();
                 b.media->set_coefficients(i, sigma_s, sigma_a, g, scale);
                 restart = true;
             }
@@ -180,18 +183,23 @@ void draw_bake_panel(Workbench::State& s) {
         moved |= ImGui::SliderFloat("pitch", &b.pitch, -60.0f, 60.0f, "%.0f deg");
         moved |= ImGui::SliderFloat("zoom", &b.zoom, 0.3f, 4.0f, "%.2f");
         if (moved && !bake_busy(s) && b.baker) {
+            s.reference_job.reset();  // a comparison holds the old view
             std::lock_guard<std::mutex> lock(s.results_mutex);
+            s.references.clear();
+            s.metrics.clear();
             s.results[0] = preview_result(s, b, b.baked);
             s.view_dirty = true;
         }
     }
+    // Edited on a copy: the jobs read b.settings, so it changes only once they are stopped.
+    BakeSettings edited = b.settings;
     SettingsGroup group;
-    group.bind(BakeSettings::schema(), &b.settings);
+    group.bind(BakeSettings::schema(), &edited);
     if (draw_settings(group, true) & kInvalidatesBake) {
-        // The atlas and the estimator's copy of the settings live in the baker. (The job
-        // reads b.settings: a change while it runs is picked up by the restart below.)
+        s.reference_job.reset();
         b.job.reset();
-        b.baker_dirty = true;
+        b.settings = edited;
+        b.baker_dirty = true;  // the atlas and the estimator's settings live in the baker
         restart = true;
     }
     if (b.baker) {
@@ -200,7 +208,38 @@ void draw_bake_panel(Workbench::State& s) {
                     st.texels_valid, st.bake_ms);
         if (b.first_pass_ms >= 0.0) ImGui::Text("first preview after %.0f ms", b.first_pass_ms);
     }
-    if (restart) start_bake(s);
+    if (restart) {
+        // The comparison belongs to the media and settings it was baked with.
+        s.reference_job.reset();
+        {
+            std::lock_guard<std::mutex> lock(s.results_mutex);
+            s.references.clear();
+        }
+        s.metrics.clear();
+        start_bake(s);
+    }
+}
+
+void start_bake_reference(Workbench::State& s) {
+    BakeSession& b = *s.bake;
+    s.reference_job_frame = 0;
+    Workbench::State* sp = &s;
+    s.reference_job = std::make_unique<Job>([sp](Progress& progress) {
+        BakeSession& bk = *sp->bake;
+        BakeSettings settings = bk.settings;
+        settings.spp = 4 * bk.settings.spp;
+        settings.seed = bk.settings.seed + 7919;  // independent of the bake it is compared to
+        LightmapBaker vpt(*bk.rays, *bk.media, nullptr, BakeMethod::Vpt, settings);
+        vpt.run(&progress);
+        std::vector<LayerSet> baked;
+        for (size_t i = 0; i < vpt.lightmaps().size(); ++i) baked.push_back(vpt.layers(i));
+        const CameraPose pose = orbit_pose(sp->scene.camera.at(0.0f), bk.yaw, bk.pitch, bk.zoom);
+        LayerSet preview = render_lightmap_preview(*bk.rays, pose, sp->config.frame.width,
+                                                   sp->config.frame.height, vpt.lightmaps(), baked);
+        std::lock_guard<std::mutex> lock(sp->results_mutex);
+        sp->references[0] = std::move(preview);
+    });
+    (void)b;
 }
 
 std::vector<std::string> bake_trace(Workbench::State& s, int x, int y) {
@@ -209,7 +248,8 @@ std::vector<std::string> bake_trace(Workbench::State& s, int x, int y) {
     const LayerSet& layers = s.shown->layers;
     const Layer* texel = layers.find("lightmap_texel");
     if (!texel || x < 0 || y < 0 || x >= layers.width() || y >= layers.height()) return {};
-    const int tx = int(texel->at(layers.width(), x, y, 0)), ty = int(texel->at(layers.width(), x, y, 1));
+    const int tx = int(texel->at(layers.width(), x, y, 0)),
+              ty = int(texel->at(layers.width(), x, y, 1));
     const int m = int(texel->at(layers.width(), x, y, 2));
     if (m < 0) return {"no lightmap here (background, sphere, mirror or moving object)"};
     const ObjectLightmap& map = b.baker->lightmaps()[size_t(m)];
@@ -251,8 +291,8 @@ void draw_probe_lobes(Workbench::State& s) {
             sh_eval(3, glm::dvec3(d), y);
             vec3 v(0.0f);
             for (size_t c = 0; c < 9; ++c)
-                v += float(y[c]) * (probes[i].surface[c] + probes[i].single[c] +
-                                    probes[i].multiple[c]);
+                v += float(y[c]) *
+                     (probes[i].surface[c] + probes[i].single[c] + probes[i].multiple[c]);
             radii[i][size_t(k)] = std::max(0.0f, luminance(v));
             largest[i] = std::max(largest[i], radii[i][size_t(k)]);
         }

@@ -80,8 +80,7 @@ void draw_inspector(Workbench& wb, Workbench::State& s) {
     // One pixel is cheap to re-run; it waits while a render job owns the renderer.
     const bool idle = (!s.job || s.job->done()) && !s.show_env_bandwidth;
     const std::pair<int, int> pick{s.pick_x, s.pick_y};
-    if (s.bake && !bake_busy(s) &&
-        (s.trace_pixel != pick || s.trace_frame != s.shown->frame)) {
+    if (s.bake && !bake_busy(s) && (s.trace_pixel != pick || s.trace_frame != s.shown->frame)) {
         s.trace_lines = bake_trace(s, s.pick_x, s.pick_y);
         s.trace_point.reset();
         s.trace_pixel = pick;

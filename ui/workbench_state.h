@@ -100,6 +100,10 @@ void draw_bake_panel(Workbench::State& s);
 std::vector<std::string> bake_trace(Workbench::State& s, int x, int y);
 // Probes' SH lobes over the viewport image (call inside the viewport window).
 void draw_probe_lobes(Workbench::State& s);
+// Compare for a bake: VPT at 4 x bake.spp, its preview as the frame's reference.
+void start_bake_reference(Workbench::State& s);
+// Adds reference, error, relative_error to results[frame] and measures (results_mutex held).
+void attach_reference(Workbench::State& s, int frame);
 
 void restart_renderer(Workbench::State& s);
 // Compare, exports and sessions (workbench_tools.cpp).

@@ -23,6 +23,8 @@ namespace {
 
 const fs::path kExportDir = fs::path("freqlab-out") / "exports";
 
+}  // namespace
+
 // Adds reference, error and relative_error layers to a frame's result and measures it.
 void attach_reference(Workbench::State& s, int frame) {
     auto it = s.results.find(frame);
@@ -52,6 +54,8 @@ void attach_reference(Workbench::State& s, int frame) {
     s.metrics[frame] = compare_layers(test_only, ref_only);
 }
 
+namespace {
+
 std::string file_stem(const Workbench::State& s) {
     char stem[128];
     std::snprintf(stem, sizeof stem, "%s_frame%04d_%s", s.scene.name.c_str(),
@@ -73,6 +77,10 @@ void poll_reference(Workbench::State& s) {
 
 void start_reference(Workbench::State& s) {
     if (s.reference_job || !s.shown || !s.device) return;
+    if (s.bake) {  // method B: the reference is a VPT bake seen from the same camera
+        start_bake_reference(s);
+        return;
+    }
     const int frame = s.shown->frame;
     if (!s.reference_renderer) {
         RenderConfig rc = s.config;

@@ -143,10 +143,11 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
         const HomogeneousMedium m = o.effective();
         line("emitter %zu (%s): dir (%.2f, %.2f, %.2f), cos %.3f, %s", i, kinds[int(s.kind)],
              s.dir.x, s.dir.y, s.dir.z, cos_x, vis ? "visible" : "occluded");
-        line("  segment %.3f in media: tau_s %.4f tau_a %.4f T %.4f; effective sigma_s %.4f "
-             "sigma_a %.4f g %.3f",
-             std::isfinite(length) ? length : -1.0, o.tau_s, o.tau_a, o.transmittance(),
-             m.sigma_s, m.sigma_a, m.g);
+        line(
+            "  segment %.3f in media: tau_s %.4f tau_a %.4f T %.4f; effective sigma_s %.4f "
+            "sigma_a %.4f g %.3f",
+            std::isfinite(length) ? length : -1.0, o.tau_s, o.tau_a, o.transmittance(), m.sigma_s,
+            m.sigma_a, m.g);
         line("  direct irradiance %.5g (x T for extinction, impulse and vpt)",
              double(luminance(s.irradiance)) * std::max(0.0f, cos_x));
         if (!tables_ || !(m.sigma_s > 0.0) || !vis) continue;
@@ -159,8 +160,8 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
         q.last_bounce = std::min(settings_.media_bounces, table_bounces_);
         if (!(q.distance > 0.0) || m.sigma_t() * q.distance > ZhDistanceTable::kMaxD) continue;
         const ImpulseResponse r = query_impulse(*tables_, q);
-        for (const auto& [name, zh] : {std::pair{"single  ", &r.single},
-                                       std::pair{"multiple", &r.multiple}}) {
+        for (const auto& [name, zh] :
+             {std::pair{"single  ", &r.single}, std::pair{"multiple", &r.multiple}}) {
             std::string coeffs;
             for (double v : *zh) {
                 std::snprintf(buf, sizeof buf, " %.3e", v);
@@ -168,7 +169,8 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
             }
             line("  ZH %s x I%s", name, coeffs.c_str());
         }
-        if (s.kind == EmitterKind::Area) line("  single lobe tilted %.2f deg", r.axis_tilt * 57.2958);
+        if (s.kind == EmitterKind::Area)
+            line("  single lobe tilted %.2f deg", r.axis_tilt * 57.2958);
         IrradianceParts e;
         add_scattered(s.kind, s.intensity, s.dir, q.distance, s.shift, s.emitter_normal, o, n,
                       luminance(albedo), e, counters);

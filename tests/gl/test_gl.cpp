@@ -302,3 +302,28 @@ int main(int argc, char** argv) {
     ::testing::InitGoogleTest(&argc, argv);
     return RUN_ALL_TESTS();
 }
+
+// Method B in the workbench: a surface bake of a plane under a constant environment of
+// radiance 1 shows E = pi on the plane (away from the sphere) in the lightmapped preview, and
+// the sphere (no lightmap) has no texel.
+TEST(GlWorkbench, BakePreviewShowsTheAnalyticIrradiance) {
+    GlSession gl;
+    WorkbenchOptions o;
+    o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/analytic/sphere_on_plane.json";
+    o.method = "surface";
+    o.layer = "lm_irradiance";
+    o.settings = {"frame.width=160", "frame.height=90",  "bake.spp=512",
+                  "bake.bounces=0",  "bake.max_size=64", "bake.probes_x=0"};
+    Workbench wb(o);
+    run_until_shown(gl, wb);
+    const LayerSet* L = wb.layers();
+    ASSERT_NE(L, nullptr);
+    const Layer& e = L->get("lm_irradiance");
+    const Layer& texel = L->get("lightmap_texel");
+    // Bottom corners see the plane; the centre sees the sphere.
+    for (auto [x, y] : {std::pair{5, 85}, std::pair{154, 85}}) {
+        EXPECT_GE(texel.at(160, x, y, 2), 0.0f);
+        EXPECT_NEAR(e.at(160, x, y, 0), 3.14159f, 0.05f * 3.14159f) << x << "," << y;
+    }
+    EXPECT_EQ(texel.at(160, 80, 40, 2), -1.0f);
+}
