@@ -85,6 +85,12 @@ CacheDecision decide_observed(const CacheTestValues& v, const CacheSettings& s) 
     return CacheDecision::Reused;
 }
 
+CacheDecision decide_key_lights(const CacheTestValues& v, const CacheSettings& s) {
+    if (s.test_temporal && v.key_lights_tested && v.key_lights_then != v.key_lights_now)
+        return CacheDecision::DiscardTemporal;
+    return CacheDecision::Reused;
+}
+
 std::vector<std::string> explain(const CacheTestValues& v, int entry_object,
                                  const CacheSettings& s) {
     std::vector<std::string> out;
@@ -124,6 +130,12 @@ std::vector<std::string> explain(const CacheTestValues& v, int entry_object,
                                    100.0 * std::expm1(std::abs(v.shading_now - v.shading_then)),
                                    100.0 * s.shading_change)
                           : std::string()) +
+        (v.key_lights_tested
+             ? (v.key_lights_then != v.key_lights_now
+                    ? format("; a shadow came or went between it and a key light (mask %d -> %d)",
+                             v.key_lights_then, v.key_lights_now)
+                    : format("; key lights seen as when computed (mask %d)", v.key_lights_now))
+             : std::string()) +
         (s.test_temporal ? "" : off));
     if (v.occlusion_tested)
         out.push_back(format("occlusion: ratio at the pixel %.3f when computed, %.3f now",

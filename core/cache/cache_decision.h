@@ -80,6 +80,9 @@ struct CacheTestValues {
     bool occlusion_tested = false;
     double shading_then = 0.0, shading_now = 0.0;  // upsampled log luminance: at creation, now
     bool shading_tested = false;
+    // Visibility towards the key lights (bit per light): at creation, now.
+    int key_lights_then = 0, key_lights_now = 0;
+    bool key_lights_tested = false;
 };
 
 // Every test but the occlusion one (it needs this frame's statistics at the pixel).
@@ -88,6 +91,9 @@ CacheDecision decide_geometric(const CacheTestValues& v, int entry_object,
 // The tests against this frame's upsampled statistics, on an entry the others kept: the
 // observed half of the temporal test, then the occlusion test.
 CacheDecision decide_observed(const CacheTestValues& v, const CacheSettings& settings);
+// The key-light half of the temporal test: a shadow came or went between the entry and a key
+// light (render/key_lights.h) since it was computed.
+CacheDecision decide_key_lights(const CacheTestValues& v, const CacheSettings& settings);
 
 // One sentence per test ("angular: view moved 2.3° outside a 1.1° cone").
 std::vector<std::string> explain(const CacheTestValues& v, int entry_object,

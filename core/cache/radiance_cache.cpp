@@ -9,7 +9,14 @@ namespace freqlab {
 
 namespace {
 
-enum Flags : uint8_t { kLive = 1, kMoving = 2, kOccluded = 4, kMirror = 8 };
+enum Flags : uint8_t {
+    kLive = 1,
+    kMoving = 2,
+    kOccluded = 4,
+    kMirror = 8,
+    kKeyLightShift = 4,  // bits 4..6: visibility towards key lights 0..2
+    kKeyLightKnown = 128
+};
 
 // Half floats for what only sets radii and thresholds; clamped to the largest half.
 uint16_t to_half(float v) {
@@ -111,7 +118,8 @@ int ObjectCache::insert(const CacheEntry& e) {
     sigma_v_[i] = e.sigma_v;
     t_min_[i] = e.t_min;
     flags_[i] = uint8_t(kLive | (e.moving ? kMoving : 0) | (e.occluded ? kOccluded : 0) |
-                        (e.mirror ? kMirror : 0));
+                        (e.mirror ? kMirror : 0) | ((e.key_light_mask & 7) << kKeyLightShift) |
+                        (e.key_light_known ? kKeyLightKnown : 0));
     reflected_object_[i] = int16_t(e.reflected_object);
     reflected_position_[i] = e.reflected_position;
     reflected_normal_[i] = octahedral_encode_half(e.reflected_normal);
@@ -140,6 +148,8 @@ CacheEntry ObjectCache::get(int slot) const {
     e.moving = flags_[i] & kMoving;
     e.occluded = flags_[i] & kOccluded;
     e.mirror = flags_[i] & kMirror;
+    e.key_light_mask = uint8_t((flags_[i] >> kKeyLightShift) & 7);
+    e.key_light_known = flags_[i] & kKeyLightKnown;
     e.reflected_object = reflected_object_[i];
     e.reflected_position = reflected_position_[i];
     e.reflected_normal = octahedral_decode_half(reflected_normal_[i]);

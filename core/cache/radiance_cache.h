@@ -44,6 +44,11 @@ struct CacheEntry {
     // Likewise the upsampled log luminance of the initial points' shading (NaN: none reached).
     float shading_field = NAN;
     bool moving = false, occluded = false, mirror = false;
+    // Visibility towards the frame's key lights when computed (bit k: key k unoccluded), and
+    // whether it was recorded (scenes where something moves): the key-light half of the
+    // temporal test (cache_decision.h).
+    uint8_t key_light_mask = 0;
+    bool key_light_known = false;
     int reflected_object = -1;
     vec3 reflected_position{0.0f};
     vec3 reflected_normal{0.0f, 0.0f, 1.0f};

@@ -8,6 +8,7 @@
 
 #include "base/stopwatch.h"
 #include "render/cache_pass.h"
+#include "render/key_lights.h"
 #include "render/points_pass.h"
 #include "render/reconstruction.h"
 #include "render/sparse_sampling.h"
@@ -129,6 +130,8 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
     std::vector<CacheRecord>& records = result.cache_records;
     std::vector<int> standin(n, -1);  // initial pixels a kept entry stands in for
     const bool moves = scene_has_motion(scene);
+    // Method cache: the key lights whose visibility entries record (render/key_lights.h).
+    const std::vector<KeyLight> keys = cache && moves ? key_lights(rs) : std::vector<KeyLight>{};
     if (cache) {
         reflected.resize(n);
         footprint.resize(n);
@@ -222,6 +225,20 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
             shading_field[i] = found[i] && moves ? stats[i][4] : NAN;
         }
         apply_field_tests(records, field, shading_field, found, cache->settings);
+        if (moves && cache->settings.test_temporal && !keys.empty()) {
+            // The key-light half of the temporal test (render/key_lights.h).
+            tbb::parallel_for(size_t(0), records.size(), [&](size_t k) {
+                CacheRecord& r = records[k];
+                if (r.decision != CacheDecision::Reused) return;
+                const CacheEntry e = cache->state.cache.object(r.object).get(r.slot);
+                if (!e.key_light_known) return;
+                r.tests.key_lights_tested = true;
+                r.tests.key_lights_then = e.key_light_mask;
+                r.tests.key_lights_now = key_light_mask(rs, keys, r.world_position,
+                                                        gb.hits[size_t(r.pixel)].shading_normal);
+                r.decision = decide_key_lights(r.tests, cache->settings);
+            });
+        }
         keeper = resolve_pixels(records, cache->state.cache, view, cache->settings);
         for (size_t i = 0; i < n; ++i) {
             if (keeper[i] < 0 || fresh[i]) continue;
@@ -342,16 +359,29 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
         std::vector<std::vector<size_t>> by_object(scene.objects.size());
         for (size_t i = 0; i < n; ++i)
             if (fresh[i]) by_object[size_t(gb.hits[i].object)].push_back(i);
+        // What each new entry sees of the key lights (only when something moves).
+        std::vector<uint8_t> key_mask(moves && !keys.empty() ? n : 0, 0);
+        if (!key_mask.empty())
+            tbb::parallel_for(size_t(0), n, [&](size_t i) {
+                if (fresh[i])
+                    key_mask[i] =
+                        key_light_mask(rs, keys, gb.hits[i].position, gb.hits[i].shading_normal);
+            });
         for (size_t o = 0; o < by_object.size(); ++o) {
             ObjectCache& oc = rc.object(int(o));
             oc.reserve_for(by_object[o].size());
             const bool moving = !scene.objects[o].animation.is_static();
             for (size_t i : by_object[o]) {
                 const SurfaceHit& refl = reflected[i];
-                oc.insert(make_cache_entry(
+                CacheEntry entry = make_cache_entry(
                     gb.hits[i], gb.view_dirs[i], view.to_world[o], point[i], value[i], field[i],
                     shading_field[i], mirror[i], refl,
-                    refl.valid ? &view.to_world[size_t(refl.object)] : nullptr, moving, rs.time()));
+                    refl.valid ? &view.to_world[size_t(refl.object)] : nullptr, moving, rs.time());
+                if (!key_mask.empty()) {
+                    entry.key_light_mask = key_mask[i];
+                    entry.key_light_known = true;
+                }
+                oc.insert(entry);
             }
         }
         const long evicted = rc.evict_oldest(size_t(double(cache->settings.max_megabytes) * 1e6));
