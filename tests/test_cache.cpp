@@ -118,11 +118,13 @@ TEST(CacheDecisions, OneConstructedCasePerReason) {
     turned.B_theta = 0.5f;  // r_theta = 10.2 deg
     EXPECT_EQ(decide_one(wall, turned), CacheDecision::Reused);
 
-    // Lifespan 2 pi acos(1 - 1e-7) / B_t = 2.8e-3 s at B_t = 1; the entry is 0.5 s old.
+    // Lifespan 2 pi acos(1 - 0.1) / B_t = 0.283 s at B_t = 10; the entry is 0.5 s old.
     CacheEntry old = wall.entry_at(3, 4, 0.5f);
-    old.B_t = 1.0f;
+    old.B_t = 10.0f;
     EXPECT_EQ(decide_one(wall, old, 0, s, &v), CacheDecision::DiscardTemporal);
-    EXPECT_NEAR(v.lifespan, 2 * M_PI * std::acos(1 - 1e-7) / 1.0, 1e-9);
+    EXPECT_NEAR(v.lifespan, 2 * M_PI * std::acos(1 - 0.1) / 10.0, 1e-6);
+    old.B_t = 2.0f;  // 1.42 s: still alive
+    EXPECT_EQ(decide_one(wall, old), CacheDecision::Reused);
     old.B_t = 0.0f;  // nothing moving near it: an infinite lifespan
     EXPECT_EQ(decide_one(wall, old), CacheDecision::Reused);
 
@@ -130,7 +132,7 @@ TEST(CacheDecisions, OneConstructedCasePerReason) {
     CacheSettings off;
     off.test_spatial = off.test_temporal = false;
     moved.B_x = 10.0f;
-    old.B_t = 1.0f;
+    old.B_t = 10.0f;
     EXPECT_EQ(decide_one(wall, moved, 0, off), CacheDecision::Reused);
     EXPECT_EQ(decide_one(wall, old, 0, off), CacheDecision::Reused);
 
@@ -297,8 +299,9 @@ TEST(RadianceCacheStorage, EvictionRemovesTheOldestFirst) {
     EXPECT_EQ(cache.evict_oldest(10 * per), 0);
     EXPECT_EQ(cache.evict_oldest(6 * per), 4);
     for (int o = 0; o < 2; ++o)
-        for (size_t s = 0; s < cache.object(o).capacity(); ++s)
+        for (size_t s = 0; s < cache.object(o).capacity(); ++s) {
             if (cache.object(o).live(int(s))) EXPECT_GE(cache.object(o).get(int(s)).created, 4.0f);
+        }
 }
 
 namespace {

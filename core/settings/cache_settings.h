@@ -9,7 +9,7 @@ struct CacheSettings {
     // Quality thresholds: eps = acos(1 - q) (seed §5.2); the seed's values (§7).
     float q_eps_x = 1e-4f;               // spatial: r_x = 2 pi eps_x / B_x
     float q_eps_theta = 1e-4f;           // angular: r_theta = 2 pi eps_theta / B_theta
-    float q_eps_t = 1e-7f;               // temporal: lifespan 2 pi eps_t / B_t
+    float q_eps_t = 0.1f;                // temporal: lifespan 2 pi eps_t / B_t (calibrated)
     float occlusion_threshold = 0.125f;  // |occlusion ratio change| that discards (§5.3)
     float shading_change = 0.1f;  // observed relative change of the shading around it (temporal)
     // Ablation switches: each validity test can be turned off.
