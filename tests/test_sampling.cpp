@@ -173,10 +173,16 @@ TEST(Sampling, EnvironmentSamplesFollowTexelProbabilities) {
     for (int i = 0; i < n; ++i) {
         vec3 d;
         float pdf;
-        env.sample(vec4(rng.next_float(), rng.next_float(), rng.next_float(), rng.next_float()), &d,
-                   &pdf);
+        const vec3 radiance = env.sample(
+            vec4(rng.next_float(), rng.next_float(), rng.next_float(), rng.next_float()), &d, &pdf);
         ASSERT_GT(pdf, 0.0f);
-        mismatches += std::fabs(pdf - env.pdf(d)) > 2e-3f * pdf;
+        // The staged lookup (texel_of, eval_with_pdf_at) of the sampled direction gives back
+        // the sample's density and radiance.
+        vec2 uv_back;
+        float pdf_back;
+        const vec3 radiance_back =
+            env.eval_with_pdf_at(env.texel_of(d, &uv_back), uv_back, &pdf_back);
+        mismatches += std::fabs(pdf - pdf_back) > 2e-3f * pdf || radiance != radiance_back;
         const vec2 uv = env.direction_to_uv(d);
         const int x = std::clamp(int(uv.x * w), 0, w - 1), y = std::clamp(int(uv.y * h), 0, h - 1);
         observed[size_t(y) * w + x] += 1;

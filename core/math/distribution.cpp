@@ -33,13 +33,16 @@ Distribution2D::Distribution2D(const std::vector<float>& weights, int width, int
     // Leftovers are 1 up to rounding: they keep themselves (keep = 1 already).
 }
 
-vec2 Distribution2D::sample(const vec4& u, float* pdf) const {
-    const size_t n = pdf_.size();
-    size_t i = std::min(size_t(u.x * float(n)), n - 1);
+int Distribution2D::sample_texel(const vec4& u) const {
+    const size_t i = alias_slot(u);
     const AliasEntry& e = alias_[i];
-    if (u.y >= e.keep) i = e.alias;
-    *pdf = pdf_[i];
-    const int x = int(i % size_t(width_)), y = int(i / size_t(width_));
+    return int(u.y >= e.keep ? e.alias : uint32_t(i));
+}
+
+vec2 Distribution2D::sample(const vec4& u, float* pdf) const {
+    const int i = sample_texel(u);
+    *pdf = pdf_[size_t(i)];
+    const int x = i % width_, y = i / width_;
     return vec2(std::min((x + u.z) / width_, 0x1.fffffep-1f),
                 std::min((y + u.w) / height_, 0x1.fffffep-1f));
 }

@@ -2,6 +2,7 @@
 // once per map; sampling is O(1).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -20,6 +21,12 @@ class Distribution2D {
 
     // u.x picks the texel, u.y is the alias coin, (u.z, u.w) the position inside the texel.
     vec2 sample(const vec4& u, float* pdf) const;
+    // The texel index sample() picks (one alias-table read); the position inside the texel is
+    // then ((x + u.z) / width, (y + u.w) / height).
+    int sample_texel(const vec4& u) const;
+    // Starts loading the alias entry sample_texel(u) will read: a loop over many samples can
+    // overlap those cache misses.
+    void prefetch(const vec4& u) const { __builtin_prefetch(&alias_[alias_slot(u)]); }
     float pdf(vec2 uv) const;
     float texel_pdf(int index) const { return pdf_[size_t(index)]; }
     int width() const { return width_; }
@@ -28,6 +35,9 @@ class Distribution2D {
     double texel_probability(int x, int y) const;
 
   private:
+    size_t alias_slot(const vec4& u) const {
+        return std::min(size_t(u.x * float(alias_.size())), alias_.size() - 1);
+    }
     int width_ = 0, height_ = 0;
     struct AliasEntry {
         float keep;      // probability of keeping texel i

@@ -15,6 +15,14 @@ struct Scratch {
     std::unique_ptr<bool[]> occluded;
     size_t occluded_size = 0;
     std::vector<vec3> env_units, brdf_units;
+    // The uniforms of the environment and quad-light samples, drawn up front in the order the
+    // sample loop consumes them, and the texels they pick (see EnvironmentMap::prefetch_alias).
+    std::vector<vec4> env_u;
+    std::vector<vec2> light_u;
+    std::vector<int> env_texel;
+    std::vector<BrdfSample> brdf_samples;
+    std::vector<int> brdf_texel;
+    std::vector<vec2> brdf_uv;
 };
 
 Scratch& scratch() {
@@ -109,12 +117,34 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
                                            other_pdf, w, value, false});
     };
 
+    // The random numbers first (same order as drawing them inside the loop), so that the
+    // environment's table reads of all samples can be in flight together.
+    s.env_u.clear();
+    s.light_u.clear();
+    for (int i = 0; i < n_env; ++i) {
+        if (environment_) {
+            const vec4 u(rng.next_float(), rng.next_float(), rng.next_float(), rng.next_float());
+            s.env_u.push_back(u);
+            environment_->prefetch_alias(u);
+        }
+        for (const Light* l : lights_)
+            if (l->type == LightType::Quad) {
+                const float u1 = rng.next_float(), u2 = rng.next_float();
+                s.light_u.emplace_back(u1, u2);
+            }
+    }
+    s.env_texel.resize(s.env_u.size());
+    for (size_t i = 0; i < s.env_u.size(); ++i) {
+        s.env_texel[i] = environment_->sample_texel(s.env_u[i]);
+        environment_->prefetch_texel(s.env_texel[i]);
+    }
+    size_t next_light_u = 0;
     for (int i = 0; i < n_env; ++i) {
         if (environment_) {
             vec3 dir;
             float pdf_env;
-            const vec4 u(rng.next_float(), rng.next_float(), rng.next_float(), rng.next_float());
-            const vec3 le = environment_->sample(u, &dir, &pdf_env);
+            const vec4& u = s.env_u[size_t(i)];
+            const vec3 le = environment_->sample_at(s.env_texel[size_t(i)], u, &dir, &pdf_env);
             const float cos_i = glm::dot(dir, ns);
             if (pdf_env > 0.0f && cos_i > 0.0f) {
                 const float pdf_brdf = brdf.pdf(sp.wo, dir);
@@ -135,7 +165,8 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
                 dir = -l->direction;
                 value = l->intensity;
             } else {  // Quad: uniform on the area, converted to solid angle
-                const float u1 = rng.next_float(), u2 = rng.next_float();
+                const vec2 ul = s.light_u[next_light_u++];
+                const float u1 = ul.x, u2 = ul.y;
                 const vec3 q = l->corner + u1 * l->edge_u + u2 * l->edge_v;
                 const vec3 d = q - sp.position;
                 dist = glm::length(d);
@@ -152,12 +183,24 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
             candidate(dir, tfar, value * brdf.eval(sp.wo, dir) * cos_i, i);
         }
     }
+    s.brdf_samples.clear();
+    s.brdf_texel.resize(size_t(n_brdf));
+    s.brdf_uv.resize(size_t(n_brdf));
     for (int j = 0; j < n_brdf; ++j) {
-        const BrdfSample bs = brdf.sample(sp.wo, rng.next_float(), rng.next_float());
+        const float u1 = rng.next_float(), u2 = rng.next_float();
+        s.brdf_samples.push_back(brdf.sample(sp.wo, u1, u2));
+        const BrdfSample& bs = s.brdf_samples.back();
+        if (bs.pdf <= 0.0f || glm::dot(bs.wi, ns) <= 0.0f) continue;
+        s.brdf_texel[size_t(j)] = environment_->texel_of(bs.wi, &s.brdf_uv[size_t(j)]);
+        environment_->prefetch_texel(s.brdf_texel[size_t(j)]);
+    }
+    for (int j = 0; j < n_brdf; ++j) {
+        const BrdfSample& bs = s.brdf_samples[size_t(j)];
         const float cos_i = glm::dot(bs.wi, ns);
         if (bs.pdf <= 0.0f || cos_i <= 0.0f) continue;
         float pdf_env;
-        const vec3 le = environment_->eval_with_pdf(bs.wi, &pdf_env);
+        const vec3 le =
+            environment_->eval_with_pdf_at(s.brdf_texel[size_t(j)], s.brdf_uv[size_t(j)], &pdf_env);
         const float w = power_heuristic(float(n_brdf), bs.pdf, float(n_env), pdf_env);
         candidate(bs.wi, INFINITY, le * bs.f * (cos_i * w / bs.pdf), -(j + 1), bs.pdf, pdf_env, w);
     }

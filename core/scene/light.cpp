@@ -60,8 +60,18 @@ vec3 EnvironmentMap::eval(const vec3& d) const {
 }
 
 vec3 EnvironmentMap::eval_with_pdf(const vec3& d, float* pdf) const {
-    const vec2 uv = direction_to_uv(d);
-    const Texel& t = texels_[size_t(texel_index(uv))];
+    vec2 uv;
+    const int texel = texel_of(d, &uv);
+    return eval_with_pdf_at(texel, uv, pdf);
+}
+
+int EnvironmentMap::texel_of(const vec3& d, vec2* uv) const {
+    *uv = direction_to_uv(d);
+    return texel_index(*uv);
+}
+
+vec3 EnvironmentMap::eval_with_pdf_at(int texel, vec2 uv, float* pdf) const {
+    const Texel& t = texels_[size_t(texel)];
     const float sin_theta = std::sin(kPi * uv.y);
     *pdf = sin_theta > 0 ? t.pdf_uv / (2.0f * kPi * kPi * sin_theta) : 0.0f;
     return t.radiance;
@@ -83,12 +93,20 @@ vec3 EnvironmentMap::uv_to_direction(vec2 uv) const {
 }
 
 vec3 EnvironmentMap::sample(const vec4& u, vec3* direction, float* pdf) const {
-    float pdf_uv;
-    const vec2 uv = distribution_.sample(u, &pdf_uv);
+    return sample_at(sample_texel(u), u, direction, pdf);
+}
+
+vec3 EnvironmentMap::sample_at(int texel, const vec4& u, vec3* direction, float* pdf) const {
+    // The position inside the texel as Distribution2D::sample places it; the texel already
+    // holds the density, so the distribution's own pdf array is not read.
+    const int w = image_->width, h = image_->height;
+    const int x = texel % w, y = texel / w;
+    const vec2 uv(std::min((x + u.z) / w, 0x1.fffffep-1f), std::min((y + u.w) / h, 0x1.fffffep-1f));
     *direction = uv_to_direction(uv);
+    const Texel& t = texels_[size_t(texel)];
     const float sin_theta = std::sin(kPi * uv.y);
-    *pdf = sin_theta > 0 ? pdf_uv / (2.0f * kPi * kPi * sin_theta) : 0.0f;
-    return texels_[size_t(texel_index(uv))].radiance;
+    *pdf = sin_theta > 0 ? t.pdf_uv / (2.0f * kPi * kPi * sin_theta) : 0.0f;
+    return t.radiance;
 }
 
 float EnvironmentMap::pdf(const vec3& d) const {
