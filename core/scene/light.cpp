@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "math/fast_atan2.h"
+
 namespace freqlab {
 
 const char* to_string(LightType type) {
@@ -80,8 +82,8 @@ vec3 EnvironmentMap::eval_with_pdf_at(int texel, vec2 uv, float* pdf) const {
 vec2 EnvironmentMap::direction_to_uv(const vec3& d) const {
     // atan2 rather than acos(z): acos loses theta's precision near the poles, where the
     // solid-angle pdf divides by sin(theta).
-    const float theta = std::atan2(std::sqrt(d.x * d.x + d.y * d.y), d.z);
-    float phi = std::atan2(d.y, d.x) - glm::radians(rotation_deg_);
+    const float theta = fast_atan2(std::sqrt(d.x * d.x + d.y * d.y), d.z);
+    float phi = fast_atan2(d.y, d.x) - glm::radians(rotation_deg_);
     phi -= kTwoPi * std::floor(phi / kTwoPi);
     return vec2(phi / kTwoPi, theta / kPi);
 }
