@@ -19,6 +19,7 @@
 #include "base/error.h"
 #include "base/file_io.h"
 #include "base/stopwatch.h"
+#include "bench_common.h"
 #include "commands.h"
 #include "image/line_plot.h"
 #include "scene/scene_loader.h"
@@ -73,11 +74,6 @@ double time_to_reach(const std::vector<CurvePoint>& c, double target) {
         return std::exp(std::log(c[i - 1].ms) + f * (std::log(c[i].ms) - std::log(c[i - 1].ms)));
     }
     return -1.0;
-}
-
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v.empty() ? NAN : v[v.size() / 2];
 }
 
 }  // namespace

@@ -26,6 +26,7 @@
 
 #include "base/error.h"
 #include "base/file_io.h"
+#include "bench_common.h"
 #include "commands.h"
 #include "image/image_io.h"
 #include "image/line_plot.h"
@@ -249,17 +250,11 @@ int run_bench_cache(const BenchArgs& a) {
         runs.push_back({"cache", run("cache", RenderMethod::Cache, {})});
         for (auto& [label, recs] : runs) report[label] = summary(recs);
         const double t_cache = report["cache"]["mean_frame_ms"].get<double>();
-        // MIS at equal time: renders at 8 and 32 spp fit t(spp) = t_0 + c spp on the first
-        // frame (t_0: G-buffer and set-up), solved for the cache's mean frame time.
-        auto mis_time = [&](int spp) {
-            FrameRenderer r(
-                scene, config_for(RenderMethod::Mis, {"mis.spp=" + std::to_string(spp)}), device);
-            r.render(first, progress);  // warm
-            return r.render(first, progress).stats["time_ms"].get<double>();
-        };
-        const double t8 = mis_time(8), t32 = mis_time(32);
-        const double per_spp = std::max((t32 - t8) / 24.0, 1e-6), t_0 = t8 - 8.0 * per_spp;
-        const int spp = std::max(1, int(std::floor((t_cache - t_0) / per_spp)));
+        // MIS at equal time: the spp whose frame takes the cache's mean frame time.
+        const int spp = equal_time_mis_spp(
+            scene,
+            [&](int n) { return config_for(RenderMethod::Mis, {"mis.spp=" + std::to_string(n)}); },
+            device, first, t_cache, progress);
         std::vector<FrameRecord> mis;
         FrameRenderer mis_renderer(
             scene, config_for(RenderMethod::Mis, {"mis.spp=" + std::to_string(spp)}), device);

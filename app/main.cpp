@@ -155,14 +155,16 @@ int main(int argc, char** argv) {
     bench->add_option("scene", ba.scene, "scene file");
     bench->add_option(
         "--study", ba.study,
-        "points: adaptive radiance points vs fixed-N MIS; cache: the cache vs "
-        "sparse and equal-time MIS over frames; cache-ablation: temporal test on/off");
+        "points: adaptive radiance points vs fixed-N MIS; sparse: sparse vs points and "
+        "equal-time MIS on one frame (time, rays, RMSE); cache: the cache vs sparse and "
+        "equal-time MIS over frames; cache-ablation: temporal test on/off; bake: method B");
     bench->add_option("--frames", ba.frames, "cache studies: A:B (default: all frames)");
     bench->add_option("--error-every", ba.error_every,
                       "cache studies: RMSE against the reference every k-th frame");
     bench->add_option("--frame", ba.frame, "frame");
     bench->add_option("--size", ba.size, "WxH");
-    bench->add_option("--runs", ba.runs, "independent adaptive renders per pixel error");
+    bench->add_option("--runs", ba.runs,
+                      "points: independent adaptive renders per pixel error; sparse: timed runs");
     bench->add_option("--reference-spp", ba.reference_spp, "bake study: VPT reference samples");
     bench->add_option("--max-spp", ba.max_spp, "bake study: impulse / extinction curve length");
     bench->add_option("--overhead-spp", ba.overhead_spp,

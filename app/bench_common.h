@@ -1,0 +1,20 @@
+// Pieces the `freqlab bench` studies share.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "render/frame_renderer.h"
+
+namespace freqlab {
+
+// The MIS sample count whose frame takes `target_ms`: frames at 8 and 32 spp (each rendered
+// twice, the first warms caches) fit t(spp) = t_0 + c spp, t_0 being the G-buffer and set-up.
+// `mis_config(spp)` builds the MIS configuration at a sample count.
+int equal_time_mis_spp(const Scene& scene, const std::function<RenderConfig(int spp)>& mis_config,
+                       const EmbreeDevice& device, int frame, double target_ms, Progress& progress);
+
+double median(std::vector<double> v);
+
+}  // namespace freqlab
