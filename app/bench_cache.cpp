@@ -86,14 +86,7 @@ int run_bench_cache(const BenchArgs& a) {
         a.frames.empty() ? "0:" + std::to_string(scene.frame_count) : a.frames, scene.frame_count);
     EmbreeDevice device(0);
     auto config_for = [&](RenderMethod method, const std::vector<std::string>& extra) {
-        RenderConfig c;
-        c.method = method;
-        SettingsGroup g = c.settings_group();
-        for (const std::string& s : a.sets) g.apply_assignment(s);
-        for (const std::string& s : extra) g.apply_assignment(s);
-        c.frame.width = w;
-        c.frame.height = h;
-        return c;
+        return bench_config(method, a.sets, extra, w, h);
     };
     Progress progress;
 

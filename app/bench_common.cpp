@@ -18,6 +18,18 @@ int equal_time_mis_spp(const Scene& scene, const std::function<RenderConfig(int 
     return std::max(1, int(std::floor((target_ms - t_0) / per_spp)));
 }
 
+RenderConfig bench_config(RenderMethod method, const std::vector<std::string>& sets,
+                          const std::vector<std::string>& extra, int width, int height) {
+    RenderConfig c;
+    c.method = method;
+    SettingsGroup g = c.settings_group();
+    for (const std::string& s : sets) g.apply_assignment(s);
+    for (const std::string& s : extra) g.apply_assignment(s);
+    c.frame.width = width;
+    c.frame.height = height;
+    return c;
+}
+
 double median(std::vector<double> v) {
     if (v.empty()) return NAN;
     std::sort(v.begin(), v.end());

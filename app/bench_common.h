@@ -17,4 +17,9 @@ int equal_time_mis_spp(const Scene& scene, const std::function<RenderConfig(int 
 
 double median(std::vector<double> v);
 
+// A render configuration for a study: `method`, the user's --set assignments then the study's
+// own `extra` ones, at width x height.
+RenderConfig bench_config(RenderMethod method, const std::vector<std::string>& sets,
+                          const std::vector<std::string>& extra, int width, int height);
+
 }  // namespace freqlab
