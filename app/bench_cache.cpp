@@ -3,8 +3,8 @@
 //
 // cache: `--method sparse` (the no-cache baseline) and `--method cache` over --frames, in that
 //   order in one process; RMSE against the reference every --error-every frames; the MIS
-//   baseline at equal time (spp from a calibration render at 16 spp, scaled to the cache's mean
-//   frame time) on the same frames. Writes regions.exr, bench_cache.csv (per frame),
+//   baseline at equal time (equal_time_mis_spp at the cache's mean frame time) on the same
+//   frames. Writes regions.exr, bench_cache.csv (per frame),
 //   bench_cache.json (summary over frames >= 5) and cumulative_time.png.
 // cache-ablation: the cache with and without the temporal test; RMSE over the pixels the moving
 //   shadows sweep: pixels whose first surface belongs to a static object in every frame and
@@ -90,7 +90,7 @@ int run_bench_cache(const BenchArgs& a) {
     };
     Progress progress;
 
-    // References (from the reference cache when rendered before), colour and object ids only.
+    // References (from the reference cache when rendered before), colour only.
     std::map<int, LayerSet> reference;
     {
         FrameRenderer renderer(scene, config_for(RenderMethod::Reference, {}), device);
@@ -99,11 +99,10 @@ int run_bench_cache(const BenchArgs& a) {
             const FrameResult r = renderer.render(f, progress);
             LayerSet keep(w, h);
             keep.add("color", LayerKind::Color, 3).data = r.layers.get("color").data;
-            keep.add("object", LayerKind::Categorical, 1).data = r.layers.get("object").data;
             reference.emplace(f, std::move(keep));
         }
     }
-    // The regions: static-object pixels (the object layer holds index + 1, 0 = background).
+    // The regions, over pixels whose first surface is a static object in every frame.
     const size_t n = size_t(w) * h;
     auto is_static = [&](int object_index) {
         return object_index >= 0 && object_index < int(scene.objects.size()) &&

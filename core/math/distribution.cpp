@@ -39,12 +39,16 @@ int Distribution2D::sample_texel(const vec4& u) const {
     return int(u.y >= e.keep ? e.alias : uint32_t(i));
 }
 
+vec2 Distribution2D::texel_point(int texel, const vec4& u) const {
+    const int x = texel % width_, y = texel / width_;
+    return vec2(std::min((x + u.z) / width_, 0x1.fffffep-1f),
+                std::min((y + u.w) / height_, 0x1.fffffep-1f));
+}
+
 vec2 Distribution2D::sample(const vec4& u, float* pdf) const {
     const int i = sample_texel(u);
     *pdf = pdf_[size_t(i)];
-    const int x = i % width_, y = i / width_;
-    return vec2(std::min((x + u.z) / width_, 0x1.fffffep-1f),
-                std::min((y + u.w) / height_, 0x1.fffffep-1f));
+    return texel_point(i, u);
 }
 
 float Distribution2D::pdf(vec2 uv) const {

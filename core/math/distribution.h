@@ -21,9 +21,9 @@ class Distribution2D {
 
     // u.x picks the texel, u.y is the alias coin, (u.z, u.w) the position inside the texel.
     vec2 sample(const vec4& u, float* pdf) const;
-    // The texel index sample() picks (one alias-table read); the position inside the texel is
-    // then ((x + u.z) / width, (y + u.w) / height).
+    // The texel index sample() picks (one alias-table read), and where in it sample() lands.
     int sample_texel(const vec4& u) const;
+    vec2 texel_point(int texel, const vec4& u) const;
     // Starts loading the alias entry sample_texel(u) will read: a loop over many samples can
     // overlap those cache misses.
     void prefetch(const vec4& u) const { __builtin_prefetch(&alias_[alias_slot(u)]); }

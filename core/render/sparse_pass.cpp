@@ -1,7 +1,6 @@
 #include "render/sparse_pass.h"
 
 #include <tbb/parallel_for.h>
-#include <cstdio>
 
 #include <atomic>
 #include <chrono>

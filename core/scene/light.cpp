@@ -74,9 +74,14 @@ int EnvironmentMap::texel_of(const vec3& d, vec2* uv) const {
 
 vec3 EnvironmentMap::eval_with_pdf_at(int texel, vec2 uv, float* pdf) const {
     const Texel& t = texels_[size_t(texel)];
-    const float sin_theta = std::sin(kPi * uv.y);
-    *pdf = sin_theta > 0 ? t.pdf_uv / (2.0f * kPi * kPi * sin_theta) : 0.0f;
+    *pdf = solid_angle_pdf(t.pdf_uv, uv);
     return t.radiance;
+}
+
+float EnvironmentMap::solid_angle_pdf(float pdf_uv, vec2 uv) {
+    // d(u, v) = d(omega) / (2 pi^2 sin(theta)) on the lat-long map.
+    const float sin_theta = std::sin(kPi * uv.y);
+    return sin_theta > 0 ? pdf_uv / (2.0f * kPi * kPi * sin_theta) : 0.0f;
 }
 
 vec2 EnvironmentMap::direction_to_uv(const vec3& d) const {
@@ -99,22 +104,15 @@ vec3 EnvironmentMap::sample(const vec4& u, vec3* direction, float* pdf) const {
 }
 
 vec3 EnvironmentMap::sample_at(int texel, const vec4& u, vec3* direction, float* pdf) const {
-    // The position inside the texel as Distribution2D::sample places it; the texel already
-    // holds the density, so the distribution's own pdf array is not read.
-    const int w = image_->width, h = image_->height;
-    const int x = texel % w, y = texel / w;
-    const vec2 uv(std::min((x + u.z) / w, 0x1.fffffep-1f), std::min((y + u.w) / h, 0x1.fffffep-1f));
+    // The texel already holds the density: the distribution's own pdf array is not read.
+    const vec2 uv = distribution_.texel_point(texel, u);
     *direction = uv_to_direction(uv);
-    const Texel& t = texels_[size_t(texel)];
-    const float sin_theta = std::sin(kPi * uv.y);
-    *pdf = sin_theta > 0 ? t.pdf_uv / (2.0f * kPi * kPi * sin_theta) : 0.0f;
-    return t.radiance;
+    return eval_with_pdf_at(texel, uv, pdf);
 }
 
 float EnvironmentMap::pdf(const vec3& d) const {
     const vec2 uv = direction_to_uv(d);
-    const float sin_theta = std::sin(kPi * uv.y);
-    return sin_theta > 0 ? distribution_.pdf(uv) / (2.0f * kPi * kPi * sin_theta) : 0.0f;
+    return solid_angle_pdf(distribution_.pdf(uv), uv);
 }
 
 std::shared_ptr<const RgbImage> constant_latlong(const vec3& radiance, int width, int height) {

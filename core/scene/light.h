@@ -61,6 +61,7 @@ class EnvironmentMap {
 
   private:
     int texel_index(vec2 uv) const;
+    static float solid_angle_pdf(float pdf_uv, vec2 uv);
     std::string source_;
     std::shared_ptr<const RgbImage> image_;
     struct Texel {
