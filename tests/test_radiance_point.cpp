@@ -25,13 +25,13 @@ struct Mean {
 // Independent radiance points at one shading point until 3 standard errors (of the mean over
 // points, each point one draw of the adaptive estimator) fall below 0.45 % of `exact`.
 Mean adaptive_mean(const RadiancePointIntegrator& integrator, const ShadingPoint& sp, double exact,
-                   uint64_t key) {
+                   uint64_t key, const VisibilityPlan* plan = nullptr) {
     double sum = 0, sum2 = 0, samples = 0;
     long n = 0;
     for (int batch = 0; batch < 400; ++batch) {
         for (int i = 0; i < 500; ++i, ++n) {
             CounterRng rng(key, uint64_t(n), 0, 0);
-            const RadiancePoint rp = integrator.integrate(sp, PointContext{}, rng);
+            const RadiancePoint rp = integrator.integrate(sp, PointContext{}, rng, nullptr, plan);
             sum += rp.radiance.g;
             sum2 += double(rp.radiance.g) * rp.radiance.g;
             samples += rp.N_omega;
@@ -83,6 +83,61 @@ TEST(RadiancePoint, AdaptiveEstimatorIsUnbiasedOnSphereOnPlane) {
         EXPECT_LE(3 * m.se, 0.005 * c.exact) << c.what << ": too few points for a 0.5 % test";
         // The count did vary here (occlusion adds samples): the test is not of a fixed-N estimator.
         EXPECT_GT(m.mean_samples, settings.min_samples + 1.0) << c.what;
+    }
+}
+
+// The sparse pipeline's planned points (sparse.plan_samples): N_Omega from the neighbours'
+// statistics, no pilot. Unbiased for any plan; the rays are exactly the estimate's plus one per
+// occluded statistics sample, N_L fewer than a point with its own pilot.
+TEST(RadiancePoint, PlannedPointsAreUnbiasedAndCastNoPilot) {
+    const Scene scene = load_scene(FREQLAB_SOURCE_DIR "/scenes/analytic/sphere_on_plane.json");
+    EmbreeDevice device(2);
+    RayScene rs(scene, device);
+    const EnvBandwidthHierarchy bw = EnvBandwidthHierarchy::build(*scene.environment());
+    PointsSettings settings;
+    settings.max_samples = 64;
+    settings.max_pilot = 8;
+    const RadiancePointIntegrator integrator(rs, ShadingSettings{}, settings, &bw);
+    const double sigma_rho = 0.8566;  // Lambert's whole hemisphere
+    // Eq. 4.3's f_V from a plan: none without occlusion, the full room at x = 1/2 when every
+    // neighbour is occluded, and the occluded fraction of it when they are mixed (the upsampled
+    // sigma_V then carries the unoccluded neighbours' zeros).
+    EXPECT_EQ(planned_extra_samples({0.0, 0.3, 1.0}, sigma_rho, 56), 0.0);
+    EXPECT_NEAR(planned_extra_samples({1.0, 0.5 * sigma_rho, 1.0}, sigma_rho, 56), 56.0, 1e-9);
+    EXPECT_NEAR(planned_extra_samples({0.5, 0.25 * sigma_rho, 1.0}, sigma_rho, 56), 28.0, 1e-9);
+
+    const double d = 0.5;  // plane point near the contact: a quarter of the sky is the sphere
+    const ShadingPoint sp = lambert_point(scene, 0, vec3(float(d), 0, 0), vec3(0, 0, 1));
+    const double exact = 0.5 * (1.0 - std::pow(1.0 / (d * d + 1.0), 1.5));
+    const VisibilityPlan plans[] = {
+        {0.0, 0.0, 10.0, true}, {0.5, 0.2, 1.0, true}, {1.0, 0.4, 1.0, false}};
+    uint64_t key = 301;
+    for (const VisibilityPlan& plan : plans) {
+        const Mean m = adaptive_mean(integrator, sp, exact, key++, &plan);
+        std::printf("plan (%.1f, %.1f): exact %.5f planned %.5f +- %.5f, N_Omega %.1f\n",
+                    plan.occluded_fraction, plan.sigma_V, exact, m.mean, m.se, m.mean_samples);
+        EXPECT_LE(std::fabs(m.mean - exact), 3 * m.se);
+        EXPECT_LE(3 * m.se, 0.005 * exact);
+
+        CounterRng a(9, 0, 0, 0), b(9, 0, 0, 0);
+        const RadiancePoint planned = integrator.integrate(sp, PointContext{}, a, nullptr, &plan);
+        const RadiancePoint own = integrator.integrate(sp, PointContext{}, b);
+        // Shadow rays are cast for the samples above the horizon (about 3/4 of them here: the
+        // environment's half below is skipped), so the counts are bounds: the planned point's
+        // rays never exceed its estimate's N_Omega (+ the distance rays), while a point with its
+        // own pilot casts the pilot's on top.
+        const long distance_rays = plan.occluder_distances ? planned.pilot_occluded : 0;
+        EXPECT_LE(planned.rays - distance_rays, long(planned.N_omega));
+        EXPECT_GT(planned.rays - distance_rays, long(planned.N_omega) / 2);
+        EXPECT_GT(own.pilot_rays, 0);
+        EXPECT_LE(own.rays - own.pilot_occluded - own.pilot_rays, long(own.N_omega));
+        // Statistics are still measured, on N_L of the estimate's own samples.
+        EXPECT_GT(planned.pilot_rays, 0);
+        EXPECT_LE(planned.pilot_rays, int(planned.N_L));
+        EXPECT_GT(planned.occlusion_ratio, 0.0);
+        if (!plan.occluder_distances) {
+            EXPECT_EQ(planned.t_min, plan.t_min);
+        }
     }
 }
 

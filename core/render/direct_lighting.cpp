@@ -214,7 +214,8 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
     if (recorded_) recorded_->insert(recorded_->end(), s.rays.begin(), s.rays.end());
     if (cast)
         for (size_t k = 0; k < n_rays; ++k)
-            cast->push_back(CastSample{s.rays[k], s.occluded[k], s.unit[k] < 0});
+            cast->push_back(CastSample{s.rays[k], s.occluded[k], s.unit[k] < 0,
+                                       s.unit[k] >= 0 ? s.unit[k] : -s.unit[k] - 1});
     if (traced_)
         for (size_t k = 0; k < n_rays; ++k) (*traced_)[traced_before + k].occluded = s.occluded[k];
     result.rays = long(n_rays);

@@ -54,6 +54,7 @@ class DirectLighting {
         Ray ray;
         bool occluded;
         bool brdf_strategy;
+        int unit;  // the strategy's sample index (0-based) the ray belongs to
     };
     // The estimator at a point (no mirror handling): what trace() uses and tests call. With
     // `cast`, every shadow ray and its visibility is appended (thread-safe: caller's vector).

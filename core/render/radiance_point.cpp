@@ -81,8 +81,8 @@ RadiancePointIntegrator::RadiancePointIntegrator(const RayScene& scene,
 }
 
 RadiancePoint RadiancePointIntegrator::integrate_hit(const SurfaceHit& first, const vec3& first_wo,
-                                                     const PointContext& context,
-                                                     CounterRng& rng) const {
+                                                     const PointContext& context, CounterRng& rng,
+                                                     const VisibilityPlan* plan) const {
     const MirrorPath path = follow_mirrors(first, first_wo);
     if (!path.hit.valid) {
         RadiancePoint rp;
@@ -99,7 +99,9 @@ RadiancePoint RadiancePointIntegrator::integrate_hit(const SurfaceHit& first, co
         ctx.eye_distance += path.extra_distance;
         ctx.object = path.hit.object;
     }
-    RadiancePoint rp = integrate(lighting_.shading_point(path.hit, path.wo), ctx, rng);
+    // A plan describes the pixel's own surface: not the one its mirrors show.
+    RadiancePoint rp = integrate(lighting_.shading_point(path.hit, path.wo), ctx, rng, nullptr,
+                                 path.bounces == 0 ? plan : nullptr);
     rp.radiance *= path.throughput;
     rp.variance *= luminance(path.throughput) * luminance(path.throughput);
     rp.rays += path.rays;
@@ -133,8 +135,8 @@ MirrorPath RadiancePointIntegrator::follow_mirrors(const SurfaceHit& first,
 }
 
 RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const PointContext& ctx,
-                                                 CounterRng& rng,
-                                                 std::vector<std::string>* chain) const {
+                                                 CounterRng& rng, std::vector<std::string>* chain,
+                                                 const VisibilityPlan* plan) const {
     RadiancePoint rp;
     const Material& material = *sp.material;
     const BrdfFootprint footprint = brdf_footprint(material);
@@ -160,11 +162,100 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
         "(clamped to [%d, %d])",
         rp.B_L, b_cone, n_l, settings_.min_samples, pilot_max);
 
-    // Pilot: N_L MIS samples, every shadow ray kept with its visibility.
+    // The samples the visibility statistics are gathered on: a pilot of N_L MIS samples, or,
+    // with a plan, the first N_L of the planned estimate's own samples (the same distribution).
     std::vector<DirectLighting::CastSample> cast;
-    const RadianceEstimate pilot = lighting_.estimate(sp, n_l, rng, &cast);
-    rp.rays += pilot.rays;
+    RadianceEstimate planned, pilot_estimate;
+    int n_omega = n_l;
+    if (plan) {
+        const double f_v = planned_extra_samples(*plan, rp.sigma_rho, n_max - n_l);
+        n_omega = std::min(n_max, n_l + int(std::lround(f_v)));
+        say(chain,
+            "planned from neighbours: occluded fraction %.3f, sigma_V %.5f rad -> f_V = %.2f, "
+            "N_Omega = %d (no pilot)",
+            plan->occluded_fraction, plan->sigma_V, f_v, n_omega);
+        planned = lighting_.estimate(sp, n_omega, rng, &cast);
+        rp.rays += planned.rays;
+        const int n_env = (n_l + 1) / 2, n_brdf = n_l / 2;
+        cast.erase(std::remove_if(cast.begin(), cast.end(),
+                                  [&](const DirectLighting::CastSample& c) {
+                                      return c.unit >= (c.brdf_strategy ? n_brdf : n_env);
+                                  }),
+                   cast.end());
+    } else {
+        const RadianceEstimate pilot = lighting_.estimate(sp, n_l, rng, &cast);
+        rp.rays += pilot.rays;
+        pilot_estimate = pilot;
+    }
     rp.pilot_rays = int(cast.size());
+    const bool distances = !plan || plan->occluder_distances;
+    const double f_v = visibility_statistics(sp, ctx, mu, cast, distances, rp, chain);
+    if (!distances) {
+        rp.t_min = plan->t_min;
+        rp.B_t = NAN;  // not measured
+    }
+    if (!plan) n_omega = std::min(n_max, n_l + int(std::lround(f_v)));
+    if (environment_spin_ != 0.0) {
+        // Egan et al.'s lighting term: the environment turning at omega moves the lighting in
+        // the footprint at most that fast; B_t is the larger of the two terms (seed §5.2).
+        const double lighting = std::abs(environment_spin_) * rp.B_L;
+        rp.B_t = std::max(rp.B_t, lighting);
+        say(chain, "environment spins at %.4g rad/s: |omega| B_L = %.5g -> B_t = %.5g (1/s)",
+            environment_spin_, lighting, rp.B_t);
+    }
+    rp.N_omega = n_omega;
+    say(chain, "N_Omega = min(N_max, N_L + f_V) = %d", n_omega);
+
+    // The estimate (see the header on reuse_pilot and plans).
+    if (plan) {
+        rp.radiance = planned.radiance;
+        rp.variance = planned.variance;
+    } else if (settings_.reuse_pilot) {
+        const RadianceEstimate& pilot = pilot_estimate;
+        const int extra = n_omega - n_l;
+        if (extra > 0) {
+            const RadianceEstimate more = lighting_.estimate(sp, extra, rng);
+            rp.rays += more.rays;
+            const float a = float(n_l) / n_omega, c = 1.0f - a;
+            rp.radiance = a * pilot.radiance + c * more.radiance;
+            rp.variance = a * a * pilot.variance + c * c * more.variance;
+        } else {
+            rp.radiance = pilot_estimate.radiance;
+            rp.variance = pilot_estimate.variance;
+        }
+    } else {
+        const RadianceEstimate e = lighting_.estimate(sp, n_omega, rng);
+        rp.rays += e.rays;
+        rp.radiance = e.radiance;
+        rp.variance = e.variance;
+    }
+    say(chain, "estimate (%.6g, %.6g, %.6g), variance %.4g, %ld rays in all", rp.radiance.x,
+        rp.radiance.y, rp.radiance.z, rp.variance, rp.rays);
+
+    const PointBandwidths bands = bandwidths(sp, ctx, rp.B_L, rp.t_min, chain);
+    rp.B_S = bands.B_S;
+    rp.B_x = bands.B_x;
+    rp.B_theta = bands.B_theta;
+    return rp;
+}
+
+double planned_extra_samples(const VisibilityPlan& plan, double sigma_rho, int room) {
+    if (!(plan.occluded_fraction > 0.0) || room <= 0) return 0.0;
+    const double fraction = std::min(plan.occluded_fraction, 1.0);
+    // The upsampled sigma_V averages unoccluded neighbours' zeros in: divided by the occluded
+    // fraction it is the occluded neighbours' mean, the value a pilot here would see if it
+    // found occlusion; that happens about `fraction` of the time.
+    const double x = plan.sigma_V / fraction / sigma_rho;
+    return fraction * room * std::exp(-0.5 * (x - 0.5) * (x - 0.5));
+}
+
+double RadiancePointIntegrator::visibility_statistics(
+    const ShadingPoint& sp, const PointContext& ctx, const glm::dvec3& mu,
+    const std::vector<DirectLighting::CastSample>& cast, bool distances, RadiancePoint& rp,
+    std::vector<std::string>* chain) const {
+    const Material& material = *sp.material;
+    const int n_max = std::max(settings_.max_samples, 2);
+    const int n_l = int(rp.N_L);
     const Brdf brdf(material, sp.albedo, sp.shading_normal);
     glm::dvec3 t, b;
     frame_of(mu, t, b);
@@ -194,6 +285,12 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
         w_all += w;
         if (!c.occluded) continue;
         ++rp.pilot_occluded;
+        a_o += w;
+        mean_q += w * q;
+        if (!distances) {
+            occluders.push_back({q, glm::dvec3(0.0), w, 0.0});
+            continue;
+        }
         // The occluder's hit point (one more ray: occlusion rays do not report distances).
         const SurfaceHit hit = scene_.intersect(c.ray);
         ++rp.rays;
@@ -208,8 +305,6 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
             angular_speed = glm::length(v - glm::dot(v, d) * d) / std::max(dist, 1e-9);
         }
         occluders.push_back({q, p, w, angular_speed});
-        a_o += w;
-        mean_q += w * q;
         mean_p += w * p;
     }
     rp.occlusion_ratio = w_all > 0 ? a_o / w_all : 0.0;
@@ -251,6 +346,7 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
             mean_q.x, mean_q.y, sigma_q[0][0], sigma_q[1][0], sigma_q[0][1], sigma_q[1][1]);
         say(chain, "sigma_V = %.5f rad, x = sigma_V / sigma_rho = %.4f, f_V = %.2f", rp.sigma_V, x,
             f_v);
+        if (!distances) return f_v;  // t_min and B_t are the caller's
         say(chain, "occluder distance mu_t = %.5f, sigma_t = %.5f, mu_t - 3 sigma_t = %.5f%s", mu_t,
             sigma_t, rp.t_min, rp.t_min <= 0 ? " <= 0: nearest pilot hit used" : "");
         if (!(rp.t_min > 0)) rp.t_min = nearest;
@@ -266,49 +362,11 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
         rp.B_t = m1 + 3.0 * sd;
         say(chain, "occluders' |v'| B_L: mean %.5g, deviation %.5g -> B_t = %.5g (1/s)", m1, sd,
             rp.B_t);
-    } else {
+    } else if (distances) {
         rp.t_min = large_distance_;
         say(chain, "no occluded pilot sample: f_V = 0, t_min = large distance %.4g", rp.t_min);
     }
-    if (environment_spin_ != 0.0) {
-        // Egan et al.'s lighting term: the environment turning at omega moves the lighting in
-        // the footprint at most that fast; B_t is the larger of the two terms (seed §5.2).
-        const double lighting = std::abs(environment_spin_) * rp.B_L;
-        rp.B_t = std::max(rp.B_t, lighting);
-        say(chain, "environment spins at %.4g rad/s: |omega| B_L = %.5g -> B_t = %.5g (1/s)",
-            environment_spin_, lighting, rp.B_t);
-    }
-    const int n_omega = std::min(n_max, n_l + int(std::lround(f_v)));
-    rp.N_omega = n_omega;
-    say(chain, "N_Omega = min(N_max, N_L + f_V) = %d", n_omega);
-
-    // The estimate (see the header on reuse_pilot).
-    if (settings_.reuse_pilot) {
-        const int extra = n_omega - n_l;
-        if (extra > 0) {
-            const RadianceEstimate more = lighting_.estimate(sp, extra, rng);
-            rp.rays += more.rays;
-            const float a = float(n_l) / n_omega, c = 1.0f - a;
-            rp.radiance = a * pilot.radiance + c * more.radiance;
-            rp.variance = a * a * pilot.variance + c * c * more.variance;
-        } else {
-            rp.radiance = pilot.radiance;
-            rp.variance = pilot.variance;
-        }
-    } else {
-        const RadianceEstimate e = lighting_.estimate(sp, n_omega, rng);
-        rp.rays += e.rays;
-        rp.radiance = e.radiance;
-        rp.variance = e.variance;
-    }
-    say(chain, "estimate (%.6g, %.6g, %.6g), variance %.4g, %ld rays in all", rp.radiance.x,
-        rp.radiance.y, rp.radiance.z, rp.variance, rp.rays);
-
-    const PointBandwidths bands = bandwidths(sp, ctx, rp.B_L, rp.t_min, chain);
-    rp.B_S = bands.B_S;
-    rp.B_x = bands.B_x;
-    rp.B_theta = bands.B_theta;
-    return rp;
+    return f_v;
 }
 
 double RadiancePointIntegrator::environment_bandwidth(const ShadingPoint& sp) const {

@@ -29,6 +29,9 @@
 // |                 | static in the scene model, so its rotation term omega B_L is 0)          |
 // | estimate        | points.reuse_pilot off: N_Omega fresh MIS samples (the pilot only         |
 // |                 | decides, so the count cannot bias the mean); on: the seed's reuse        |
+// | planned point   | (sparse pipeline, sparse.plan_samples) N_Omega = N_L + f_V with f_V from |
+// |                 | the neighbours' upsampled statistics (planned_extra_samples); no pilot:  |
+// |                 | one estimate of N_Omega samples, statistics on its first N_L             |
 #pragma once
 
 #include <string>
@@ -66,6 +69,20 @@ struct PointContext {
     int object = -1;            // the receiver's object (its own motion is subtracted)
 };
 
+// What the neighbours' pilots found near a pixel (the sparse pipeline's upsampled statistics):
+// enough to plan a point's sample count N_Omega without a pilot of its own.
+struct VisibilityPlan {
+    double occluded_fraction = 0.0;  // weighted share of neighbours whose pilot saw occlusion
+    double sigma_V = 0.0;            // their weighted mean sigma_V (0 for unoccluded ones), rad
+    double t_min = 0.0;              // their occluder distance: the point's t_min when ...
+    bool occluder_distances = true;  // ... this is off (no extra rays for the point's own; B_t
+                                     // is then not measured: NaN). The cache needs them.
+};
+
+// f_V of Eq. 4.3 expected from a plan: the occluded fraction times f_V at the occluded
+// neighbours' mean sigma_V; `room` = N_max - N_L.
+double planned_extra_samples(const VisibilityPlan& plan, double sigma_rho, int room);
+
 // |n1 - n0| / |p1 - p0| over the pixel's neighbours on the same object (the larger of x, y).
 double screen_space_curvature(const SurfaceHit& centre, const SurfaceHit* neighbours, int count);
 
@@ -92,14 +109,19 @@ class RadiancePointIntegrator {
     RadiancePointIntegrator(const RayScene& scene, const ShadingSettings& shading,
                             const PointsSettings& settings, const EnvBandwidthHierarchy* bandwidth);
     // With `chain`, every input, operator and intermediate value is appended as text.
+    // With `plan`, N_Omega comes from the plan and no pilot is cast: one estimate of N_Omega
+    // samples, whose first N_L (by strategy) give the visibility statistics. The count then
+    // depends only on other pixels' samples, so the estimate stays unbiased and the pilot's
+    // N_L rays are saved.
     RadiancePoint integrate(const ShadingPoint& point, const PointContext& context, CounterRng& rng,
-                            std::vector<std::string>* chain = nullptr) const;
+                            std::vector<std::string>* chain = nullptr,
+                            const VisibilityPlan* plan = nullptr) const;
     // The point seen at a G-buffer hit: perfect mirrors are followed (Whitted, up to
     // shading.mirror_depth) and the radiance point is integrated at the first non-mirror hit,
     // times the mirrors' albedos; its frequency fields are that point's. A ray that escapes
     // sees the environment.
     RadiancePoint integrate_hit(const SurfaceHit& hit, const vec3& wo, const PointContext& context,
-                                CounterRng& rng) const;
+                                CounterRng& rng, const VisibilityPlan* plan = nullptr) const;
     MirrorPath follow_mirrors(const SurfaceHit& hit, const vec3& wo) const;
     const DirectLighting& lighting() const { return lighting_; }
     // B_L in the point's BRDF footprint (cycles/rad; 0 without an environment).
@@ -120,6 +142,15 @@ class RadiancePointIntegrator {
     double environment_spin_ = 0.0;    // rad/s
     double environment_turned_ = 0.0;  // rad, at the scene's time
     vec3 to_map_frame(const vec3& direction) const;
+    // Eq. 4.4-4.5, 5.1, 5.14 on the cast samples (rp.N_L set): fills the occlusion fields,
+    // t_min and B_t of `rp` (one extra ray per occluded sample for its distance; without
+    // `distances` only the angular statistics, t_min and B_t untouched) and returns the f_V
+    // they call for.
+    double visibility_statistics(const ShadingPoint& point, const PointContext& context,
+                                 const glm::dvec3& mu,
+                                 const std::vector<DirectLighting::CastSample>& cast,
+                                 bool distances, RadiancePoint& rp,
+                                 std::vector<std::string>* chain) const;
 };
 
 }  // namespace freqlab

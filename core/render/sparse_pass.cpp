@@ -107,11 +107,16 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
     std::vector<vec3> value(n, vec3(0.0f));
     std::vector<SampleKind> kind(n, SampleKind::None);
     std::atomic<long> rays{0};
+    // Adaptive points' sample counts planned from the upsampled statistics (filled after them).
+    std::vector<VisibilityPlan> plans;
+    std::vector<char> has_plan;
     auto shade = [&](size_t i, uint64_t pass) {
         const int x = int(i % size_t(w)), y = int(i / size_t(w));
         CounterRng rng(uint64_t(fs.seed) ^ kPointsStream, uint64_t(frame), i, pass);
+        const VisibilityPlan* plan =
+            pass == 1 && !has_plan.empty() && has_plan[i] ? &plans[i] : nullptr;
         RadiancePoint rp = integrator.integrate_hit(gb.hits[i], -gb.view_dirs[i],
-                                                    point_context(gb, x, y, rs.time()), rng);
+                                                    point_context(gb, x, y, rs.time()), rng, plan);
         if (!std::isfinite(rp.radiance.x + rp.radiance.y + rp.radiance.z)) rp = RadiancePoint{};
         rp.cone_samples.clear();
         rp.cone_samples.shrink_to_fit();
@@ -306,6 +311,19 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
         const float wanted = cache ? std::max(density[i] - coverage[i], 0.0f) : density[i];
         CounterRng rng(uint64_t(fs.seed) ^ kSparseStream, cache ? 0 : uint64_t(frame), i, 0);
         if (rejection_sample(wanted, rng)) adaptive.push_back(int(i));
+    }
+    if (sparse.plan_samples) {
+        plans.resize(n);
+        has_plan.assign(n, 0);
+        for (int i : adaptive)
+            if (found[size_t(i)] && !mirror[size_t(i)]) {
+                const float occluded = stats[size_t(i)][0];
+                plans[size_t(i)] = {occluded, stats[size_t(i)][3],
+                                    occluded > 0.5f ? std::exp(double(stats[size_t(i)][1]))
+                                                    : integrator.large_distance(),
+                                    cache != nullptr};
+                has_plan[size_t(i)] = 1;
+            }
     }
     progress.begin_stage("adaptive radiance points", 1);
     shade_all(adaptive, 1);

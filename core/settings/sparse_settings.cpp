@@ -29,6 +29,11 @@ const SettingsSchema& SparseSettings::schema() {
             .field(&SparseSettings::sigma_sigma_v, "sigma_sigma_v", 0.001, 10, "rad",
                    kInvalidatesShading,
                    "Cross-bilateral sigma of sigma_V (Eq. 6.2, feature sigma_v).")
+            .field(&SparseSettings::plan_samples, "plan_samples", 0, 1, "", kInvalidatesShading,
+                   "Adaptive points take their sample count N_Omega from the upsampled "
+                   "visibility statistics instead of a pilot of their own: the N_L pilot rays are "
+                   "saved and, the count coming from other pixels, the estimate stays unbiased. "
+                   "Their own statistics come from their estimate's first N_L samples.")
             .build();
     return s;
 }

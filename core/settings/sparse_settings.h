@@ -14,6 +14,7 @@ struct SparseSettings {
     float sigma_normal = 0.1f;    // |n_i - n_p|
     float sigma_mu_v = 0.15f;     // occlusion ratio
     float sigma_sigma_v = 0.25f;  // sigma_V (rad)
+    bool plan_samples = true;     // adaptive points take N_Omega from the upsampled statistics
     static const SettingsSchema& schema();
 };
 
