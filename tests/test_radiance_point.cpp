@@ -102,15 +102,15 @@ TEST(RadiancePoint, PlannedPointsAreUnbiasedAndCastNoPilot) {
     // Eq. 4.3's f_V from a plan: none without occlusion, the full room at x = 1/2 when every
     // neighbour is occluded, and the occluded fraction of it when they are mixed (the upsampled
     // sigma_V then carries the unoccluded neighbours' zeros).
-    EXPECT_EQ(planned_extra_samples({0.0, 0.3, 1.0}, sigma_rho, 56), 0.0);
-    EXPECT_NEAR(planned_extra_samples({1.0, 0.5 * sigma_rho, 1.0}, sigma_rho, 56), 56.0, 1e-9);
-    EXPECT_NEAR(planned_extra_samples({0.5, 0.25 * sigma_rho, 1.0}, sigma_rho, 56), 28.0, 1e-9);
+    EXPECT_EQ(planned_extra_samples({0.0, 0.3}, sigma_rho, 56), 0.0);
+    EXPECT_NEAR(planned_extra_samples({1.0, 0.5 * sigma_rho}, sigma_rho, 56), 56.0, 1e-9);
+    EXPECT_NEAR(planned_extra_samples({0.5, 0.25 * sigma_rho}, sigma_rho, 56), 28.0, 1e-9);
 
     const double d = 0.5;  // plane point near the contact: a quarter of the sky is the sphere
     const ShadingPoint sp = lambert_point(scene, 0, vec3(float(d), 0, 0), vec3(0, 0, 1));
     const double exact = 0.5 * (1.0 - std::pow(1.0 / (d * d + 1.0), 1.5));
     const VisibilityPlan plans[] = {
-        {0.0, 0.0, 10.0, true}, {0.5, 0.2, 1.0, true}, {1.0, 0.4, 1.0, false}};
+        {0.0, 0.0, 0.0, 0.0}, {0.5, 0.2, 0.7, 0.0}, {1.0, 0.4, 0.7, 0.0}};
     uint64_t key = 301;
     for (const VisibilityPlan& plan : plans) {
         const Mean m = adaptive_mean(integrator, sp, exact, key++, &plan);
@@ -126,7 +126,8 @@ TEST(RadiancePoint, PlannedPointsAreUnbiasedAndCastNoPilot) {
         // environment's half below is skipped), so the counts are bounds: the planned point's
         // rays never exceed its estimate's N_Omega (+ the distance rays), while a point with its
         // own pilot casts the pilot's on top.
-        const long distance_rays = plan.occluder_distances ? planned.pilot_occluded : 0;
+        // Occluder distances are measured only when no neighbour saw occlusion.
+        const long distance_rays = plan.occluded_fraction > 0 ? 0 : planned.pilot_occluded;
         EXPECT_LE(planned.rays - distance_rays, long(planned.N_omega));
         EXPECT_GT(planned.rays - distance_rays, long(planned.N_omega) / 2);
         EXPECT_GT(own.pilot_rays, 0);
@@ -135,8 +136,10 @@ TEST(RadiancePoint, PlannedPointsAreUnbiasedAndCastNoPilot) {
         EXPECT_GT(planned.pilot_rays, 0);
         EXPECT_LE(planned.pilot_rays, int(planned.N_L));
         EXPECT_GT(planned.occlusion_ratio, 0.0);
-        if (!plan.occluder_distances) {
-            EXPECT_EQ(planned.t_min, plan.t_min);
+        if (plan.occluded_fraction > 0) {
+            EXPECT_EQ(planned.t_min, plan.t_min_occluded);  // the pilot subset saw the sphere
+        } else {
+            EXPECT_LT(planned.t_min, 3.0);  // measured: the sphere, not the large distance
         }
     }
 }

@@ -188,11 +188,13 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
         pilot_estimate = pilot;
     }
     rp.pilot_rays = int(cast.size());
-    const bool distances = !plan || plan->occluder_distances;
+    const bool distances = !plan || !(plan->occluded_fraction > 0.0);
     const double f_v = visibility_statistics(sp, ctx, mu, cast, distances, rp, chain);
     if (!distances) {
-        rp.t_min = plan->t_min;
-        rp.B_t = NAN;  // not measured
+        const bool occluded = rp.pilot_occluded > 0;
+        rp.t_min = occluded ? plan->t_min_occluded : large_distance_;
+        rp.B_t = occluded ? plan->B_t_occluded : 0.0;
+        say(chain, "t_min %.5g and B_t %.5g (1/s) from the occluded neighbours", rp.t_min, rp.B_t);
     }
     if (!plan) n_omega = std::min(n_max, n_l + int(std::lround(f_v)));
     if (environment_spin_ != 0.0) {

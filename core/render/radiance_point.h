@@ -31,7 +31,9 @@
 // |                 | decides, so the count cannot bias the mean); on: the seed's reuse        |
 // | planned point   | (sparse pipeline, sparse.plan_samples) N_Omega = N_L + f_V with f_V from |
 // |                 | the neighbours' upsampled statistics (planned_extra_samples); no pilot:  |
-// |                 | one estimate of N_Omega samples, statistics on its first N_L             |
+// |                 | one estimate of N_Omega samples, occlusion statistics on its first N_L,  |
+// |                 | t_min and B_t the occluded neighbours' (their distances are measured     |
+// |                 | only when no neighbour saw occlusion)                                    |
 #pragma once
 
 #include <string>
@@ -74,9 +76,9 @@ struct PointContext {
 struct VisibilityPlan {
     double occluded_fraction = 0.0;  // weighted share of neighbours whose pilot saw occlusion
     double sigma_V = 0.0;            // their weighted mean sigma_V (0 for unoccluded ones), rad
-    double t_min = 0.0;              // their occluder distance: the point's t_min when ...
-    bool occluder_distances = true;  // ... this is off (no extra rays for the point's own; B_t
-                                     // is then not measured: NaN). The cache needs them.
+    // The occluded neighbours' t_min (geometric mean) and B_t: the point's own when it finds
+    // occlusion, so that it casts no ray for occluder distances.
+    double t_min_occluded = 0.0, B_t_occluded = 0.0;
 };
 
 // f_V of Eq. 4.3 expected from a plan: the occluded fraction times f_V at the occluded

@@ -9,10 +9,12 @@ namespace freqlab {
 
 double reconstruction_weight(const PixelFeature& fi, const PixelFeature& fj, float mu_i, float mu_j,
                              float sigma_i, float sigma_j, const SparseSettings& s) {
-    const float dp = glm::length(fi.position - fj.position) / std::max(fi.footprint, 1e-12f);
+    const vec3 d = fi.position - fj.position;
+    const float footprint = std::max(fi.footprint, 1e-12f);
+    const float dp2 = glm::dot(d, d) / (footprint * footprint);
     const float dn2 = glm::dot(fi.normal - fj.normal, fi.normal - fj.normal);
     const float dm = mu_i - mu_j, ds = sigma_i - sigma_j;
-    return std::exp(-(dp * dp / (2.0f * s.sigma_position * s.sigma_position) +
+    return std::exp(-(dp2 / (2.0f * s.sigma_position * s.sigma_position) +
                       dn2 / (2.0f * s.sigma_normal * s.sigma_normal) +
                       dm * dm / (2.0f * s.sigma_mu_v * s.sigma_mu_v) +
                       ds * ds / (2.0f * s.sigma_sigma_v * s.sigma_sigma_v)));
@@ -41,20 +43,27 @@ ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSett
                     const int ri = int(std::ceil(r));
                     double sum_w = 0.0;
                     glm::dvec3 acc(0.0);
-                    for (int yy = std::max(0, y - ri); yy <= std::min(h - 1, y + ri); ++yy)
-                        for (int xx = std::max(0, x - ri); xx <= std::min(w - 1, x + ri); ++xx) {
+                    for (int yy = std::max(0, y - ri); yy <= std::min(h - 1, y + ri); ++yy) {
+                        // Only the row's span inside the disc (the profile showed the scan of
+                        // the square's corners and their feature loads).
+                        const float dy = float(yy - y), room = r * r - dy * dy;
+                        if (room < 0.0f) continue;
+                        const int span = int(std::sqrt(room)) + 1;
+                        for (int xx = std::max(0, x - span); xx <= std::min(w - 1, x + span);
+                             ++xx) {
                             const size_t j = size_t(yy) * w + xx;
                             if (!in.sampled[j]) continue;
+                            const float dx = float(xx - x);
+                            if (dx * dx + dy * dy > r * r) continue;
                             const PixelFeature& fj =
                                 in.sample_features.empty() ? in.features[j] : in.sample_features[j];
                             if (fj.object != fi.object) continue;
-                            const float dx = float(xx - x), dy = float(yy - y);
-                            if (dx * dx + dy * dy > r * r) continue;
                             const double weight = reconstruction_weight(
                                 fi, fj, in.mu_v[i], in.mu_v[j], in.sigma_v[i], in.sigma_v[j], s);
                             sum_w += weight;
                             acc += weight * glm::dvec3(in.value[j]);
                         }
+                    }
                     if (sum_w > 1e-6) {
                         out.value[i] = vec3(acc / sum_w);
                         out.weight[i] = float(sum_w);

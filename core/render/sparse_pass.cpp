@@ -22,6 +22,10 @@ float log_luminance(const vec3& shading) {
     return std::log(luminance(shading) + 1e-4f);
 }
 
+float finite_or_zero(double x) {
+    return std::isfinite(x) ? float(x) : 0.0f;
+}
+
 vec3 demodulate(const vec3& radiance, const vec3& texture) {
     vec3 out(0.0f);
     for (int c = 0; c < 3; ++c) out[c] = texture[c] > 1e-6f ? radiance[c] / texture[c] : 0.0f;
@@ -198,13 +202,14 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
             const RadiancePoint& rp = point_at(size_t(i));
             values.push_back({rp.pilot_occluded > 0 ? 1.0f : 0.0f,
                               float(std::log(std::max(rp.t_min, 1e-6))), float(rp.occlusion_ratio),
-                              float(rp.sigma_V), log_luminance(value[size_t(i)])});
+                              float(rp.sigma_V), log_luminance(value[size_t(i)]),
+                              finite_or_zero(rp.B_t)});
         } else {
             const CacheRecord& r = records[size_t(standin[size_t(i)])];
             const CacheEntry e = cache->state.cache.object(r.object).get(r.slot);
             values.push_back({e.occluded ? 1.0f : 0.0f,
                               float(std::log(std::max(double(e.t_min), 1e-6))), e.occlusion_ratio,
-                              e.sigma_v, log_luminance(e.shading)});
+                              e.sigma_v, log_luminance(e.shading), finite_or_zero(e.B_t)});
             own[size_t(i)] = 1;
         }
     }
@@ -313,15 +318,23 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
         if (rejection_sample(wanted, rng)) adaptive.push_back(int(i));
     }
     if (sparse.plan_samples) {
+        const double large = integrator.large_distance();
         plans.resize(n);
         has_plan.assign(n, 0);
         for (int i : adaptive)
             if (found[size_t(i)] && !mirror[size_t(i)]) {
-                const float occluded = stats[size_t(i)][0];
-                plans[size_t(i)] = {occluded, stats[size_t(i)][3],
-                                    occluded > 0.5f ? std::exp(double(stats[size_t(i)][1]))
-                                                    : integrator.large_distance(),
-                                    cache != nullptr};
+                // Unoccluded neighbours hold t_min = the large distance and B_t = 0: taken
+                // out, the means are the occluded neighbours' (what an occluded point here
+                // would measure).
+                const VisibilityStats& v = stats[size_t(i)];
+                const double f = v[0], log_large = std::log(std::max(large, 1e-6));
+                VisibilityPlan& plan = plans[size_t(i)];
+                plan.occluded_fraction = f;
+                plan.sigma_V = v[3];
+                if (f > 0) {
+                    plan.t_min_occluded = std::exp((v[1] - (1.0 - f) * log_large) / f);
+                    plan.B_t_occluded = v[5] / f;
+                }
                 has_plan[size_t(i)] = 1;
             }
     }

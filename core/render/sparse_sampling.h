@@ -41,9 +41,10 @@ PixelFeature pixel_feature(const SurfaceHit& hit, const vec3& view_dir, double r
 // max(f_x / W, f_y / H): the angle one pixel subtends (seed §7).
 double radians_per_pixel(const CameraRayGenerator& camera, int width, int height);
 
-// {occluded, log t_min, occlusion ratio, sigma_V, log luminance of the demodulated shading}:
-// the last one only feeds the cache's observed-change test.
-constexpr int kUpsampledStats = 5;
+// {occluded, log t_min, occlusion ratio, sigma_V, log luminance of the demodulated shading, B_t}:
+// the log luminance only feeds the cache's observed-change test; B_t (and t_min) the planned
+// points' own values (render/radiance_point.h, VisibilityPlan).
+constexpr int kUpsampledStats = 6;
 using VisibilityStats = std::array<float, kUpsampledStats>;
 
 // Fills `out` at every pixel from the values at `sources` (pixel indices); `found[i]` is false
