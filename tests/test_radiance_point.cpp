@@ -110,7 +110,7 @@ TEST(RadiancePoint, PlannedPointsAreUnbiasedAndCastNoPilot) {
     const ShadingPoint sp = lambert_point(scene, 0, vec3(float(d), 0, 0), vec3(0, 0, 1));
     const double exact = 0.5 * (1.0 - std::pow(1.0 / (d * d + 1.0), 1.5));
     const VisibilityPlan plans[] = {
-        {0.0, 0.0, 0.0, 0.0}, {0.5, 0.2, 0.7, 0.0}, {1.0, 0.4, 0.7, 0.0}};
+        {0.0, 0.0, 0.0, 0.0, false}, {0.5, 0.2, 0.7, 0.0, false}, {1.0, 0.4, 0.7, 0.0, true}};
     uint64_t key = 301;
     for (const VisibilityPlan& plan : plans) {
         const Mean m = adaptive_mean(integrator, sp, exact, key++, &plan);
@@ -126,8 +126,9 @@ TEST(RadiancePoint, PlannedPointsAreUnbiasedAndCastNoPilot) {
         // environment's half below is skipped), so the counts are bounds: the planned point's
         // rays never exceed its estimate's N_Omega (+ the distance rays), while a point with its
         // own pilot casts the pilot's on top.
-        // Occluder distances are measured only when no neighbour saw occlusion.
-        const long distance_rays = plan.occluded_fraction > 0 ? 0 : planned.pilot_occluded;
+        // Occluder distances are measured when asked for or when no neighbour saw occlusion.
+        const bool measured = plan.own_distances || !(plan.occluded_fraction > 0);
+        const long distance_rays = measured ? planned.pilot_occluded : 0;
         EXPECT_LE(planned.rays - distance_rays, long(planned.N_omega));
         EXPECT_GT(planned.rays - distance_rays, long(planned.N_omega) / 2);
         EXPECT_GT(own.pilot_rays, 0);
@@ -136,7 +137,7 @@ TEST(RadiancePoint, PlannedPointsAreUnbiasedAndCastNoPilot) {
         EXPECT_GT(planned.pilot_rays, 0);
         EXPECT_LE(planned.pilot_rays, int(planned.N_L));
         EXPECT_GT(planned.occlusion_ratio, 0.0);
-        if (plan.occluded_fraction > 0) {
+        if (!measured) {
             EXPECT_EQ(planned.t_min, plan.t_min_occluded);  // the pilot subset saw the sphere
         } else {
             EXPECT_LT(planned.t_min, 3.0);  // measured: the sphere, not the large distance

@@ -113,7 +113,13 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
     stages["accel_update"] = ms_since(t0);
 
     t0 = Clock::now();
-    GBufferOutput gb = render_gbuffer(ray_scene_, frame, config_.frame, config_.gbuffer, progress);
+    // Only `gbuffer` shows the AA preview; the shading methods shade the centre hits and replace
+    // its colour, so their albedo layer is the centre's (the one their textures multiply) and
+    // the AA rays are not cast. The reference keeps them (its cached files carry that layer).
+    const bool antialiased =
+        config_.method == RenderMethod::GBuffer || config_.method == RenderMethod::Reference;
+    GBufferOutput gb =
+        render_gbuffer(ray_scene_, frame, config_.frame, config_.gbuffer, progress, antialiased);
     stages["gbuffer"] = ms_since(t0);
     result.layers = std::move(gb.layers);
     long rays = gb.rays, guarded = 0;

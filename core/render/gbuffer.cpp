@@ -21,7 +21,7 @@ void set_flush_to_zero() {
 }  // namespace
 
 GBufferOutput render_gbuffer(const RayScene& rs, int frame, const FrameSettings& fs,
-                             const GBufferSettings& gs, Progress& progress) {
+                             const GBufferSettings& gs, Progress& progress, bool antialiased) {
     const Scene& scene = rs.scene();
     const int w = fs.width, h = fs.height;
     const CameraRayGenerator camera(scene.camera.at(rs.time()), w, h);
@@ -34,7 +34,9 @@ GBufferOutput render_gbuffer(const RayScene& rs, int frame, const FrameSettings&
     out.layers = LayerSet(w, h);
     Layer& color = out.layers.add("color", LayerKind::Color, 3,
                                   "unlit preview: albedo x (0.2 + 0.8 |n.v|); background radiance");
-    Layer& albedo = out.layers.add("albedo", LayerKind::Color, 3, "surface albedo (AA averaged)");
+    Layer& albedo = out.layers.add(
+        "albedo", LayerKind::Color, 3,
+        antialiased ? "surface albedo (AA averaged)" : "surface albedo at the pixel centre");
     Layer& normal = out.layers.add("normal", LayerKind::Signed, 3, "world shading normal");
     Layer& position = out.layers.add("position", LayerKind::Signed, 3, "world position");
     Layer& depth = out.layers.add("depth", LayerKind::Continuous, 1,
@@ -91,8 +93,21 @@ GBufferOutput render_gbuffer(const RayScene& rs, int frame, const FrameSettings&
                     }
                     depth.data[p] = hit.valid ? hit.distance : 0.0f;
                     object.data[p] = float(hit.object + 1);
+                    if (!antialiased) {
+                        vec3 a;
+                        const vec3 c = shade_preview(hit, rays8[i].direction, &a);
+                        for (int ch = 0; ch < 3; ++ch) {
+                            color.data[3 * p + ch] = c[ch];
+                            albedo.data[3 * p + ch] = a[ch];
+                        }
+                    }
                 }
             }
+        if (!antialiased) {
+            rays.fetch_add(tile_rays, std::memory_order_relaxed);
+            progress.advance();
+            return;
+        }
         // Jittered AA samples, eight at a time per pixel; keys (seed, frame, pixel, sample).
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {

@@ -6,7 +6,9 @@
 // |----------------------|------------------------------------------------------------------|
 // | frame.width/height   | image size                                                       |
 // | frame.seed           | with (frame, pixel, sample) keys the jitter of AA samples        |
-// | gbuffer.aa_samples   | jittered rays averaged into `albedo` and `color`                 |
+// | gbuffer.aa_samples   | jittered rays averaged into `albedo` and `color` (when           |
+// |                      | `antialiased`: the shading methods use the centre hits only, so  |
+// |                      | they skip these rays and take both from the centre hit)          |
 #pragma once
 
 #include <atomic>
@@ -35,6 +37,7 @@ struct GBufferOutput {
 
 // `scene` must already be update()d to the frame's time.
 GBufferOutput render_gbuffer(const RayScene& scene, int frame, const FrameSettings& frame_settings,
-                             const GBufferSettings& settings, Progress& progress);
+                             const GBufferSettings& settings, Progress& progress,
+                             bool antialiased = true);
 
 }  // namespace freqlab

@@ -188,7 +188,7 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
         pilot_estimate = pilot;
     }
     rp.pilot_rays = int(cast.size());
-    const bool distances = !plan || !(plan->occluded_fraction > 0.0);
+    const bool distances = !plan || plan->own_distances || !(plan->occluded_fraction > 0.0);
     const double f_v = visibility_statistics(sp, ctx, mu, cast, distances, rp, chain);
     if (!distances) {
         const bool occluded = rp.pilot_occluded > 0;

@@ -331,6 +331,7 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
                 VisibilityPlan& plan = plans[size_t(i)];
                 plan.occluded_fraction = f;
                 plan.sigma_V = v[3];
+                plan.own_distances = cache != nullptr;
                 if (f > 0) {
                     plan.t_min_occluded = std::exp((v[1] - (1.0 - f) * log_large) / f);
                     plan.B_t_occluded = v[5] / f;

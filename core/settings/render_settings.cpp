@@ -23,7 +23,8 @@ const SettingsSchema& GBufferSettings::schema() {
             .field(&GBufferSettings::aa_samples, "aa_samples", 1, 256, "samples/px",
                    kInvalidatesGBuffer,
                    "Jittered primary rays per pixel averaged into albedo and colour; normal, "
-                   "depth and object come from the pixel-centre ray.")
+                   "depth and object come from the pixel-centre ray. Only the gbuffer preview "
+                   "and the reference cast them: the shading methods shade the centre hits.")
             .build();
     return s;
 }
