@@ -48,17 +48,28 @@ ShadingPoint lambert_point(const Scene& s, int object, vec3 p, vec3 n) {
     return ShadingPoint{p, n, n, n, &m, m.albedo.color};
 }
 
+// analytic/sphere_on_plane.json with a small sample budget (N_max 64, N_L <= 8).
+struct SphereOnPlanePoints {
+    Scene scene = load_scene(FREQLAB_SOURCE_DIR "/scenes/analytic/sphere_on_plane.json");
+    EmbreeDevice device{2};
+    RayScene rs{scene, device};
+    EnvBandwidthHierarchy bw = EnvBandwidthHierarchy::build(*scene.environment());
+    PointsSettings settings = [] {
+        PointsSettings s;
+        s.max_samples = 64;
+        s.max_pilot = 8;
+        return s;
+    }();
+    RadiancePointIntegrator integrator{rs, ShadingSettings{}, settings, &bw};
+};
+
 }  // namespace
 
 TEST(RadiancePoint, AdaptiveEstimatorIsUnbiasedOnSphereOnPlane) {
-    const Scene scene = load_scene(FREQLAB_SOURCE_DIR "/scenes/analytic/sphere_on_plane.json");
-    EmbreeDevice device(2);
-    RayScene rs(scene, device);
-    const EnvBandwidthHierarchy bw = EnvBandwidthHierarchy::build(*scene.environment());
-    PointsSettings settings;
-    settings.max_samples = 64;
-    settings.max_pilot = 8;
-    const RadiancePointIntegrator integrator(rs, ShadingSettings{}, settings, &bw);
+    const SphereOnPlanePoints f;
+    const Scene& scene = f.scene;
+    const PointsSettings& settings = f.settings;
+    const RadiancePointIntegrator& integrator = f.integrator;
     struct Case {
         const char* what;
         int object;
@@ -87,17 +98,13 @@ TEST(RadiancePoint, AdaptiveEstimatorIsUnbiasedOnSphereOnPlane) {
 }
 
 // The sparse pipeline's planned points (sparse.plan_samples): N_Omega from the neighbours'
-// statistics, no pilot. Unbiased for any plan; the rays are exactly the estimate's plus one per
-// occluded statistics sample, N_L fewer than a point with its own pilot.
+// statistics, no pilot. Unbiased for any plan; its rays are the estimate's (plus one per occluded
+// statistics sample where it measures occluder distances), a point with its own pilot casts the
+// pilot's on top.
 TEST(RadiancePoint, PlannedPointsAreUnbiasedAndCastNoPilot) {
-    const Scene scene = load_scene(FREQLAB_SOURCE_DIR "/scenes/analytic/sphere_on_plane.json");
-    EmbreeDevice device(2);
-    RayScene rs(scene, device);
-    const EnvBandwidthHierarchy bw = EnvBandwidthHierarchy::build(*scene.environment());
-    PointsSettings settings;
-    settings.max_samples = 64;
-    settings.max_pilot = 8;
-    const RadiancePointIntegrator integrator(rs, ShadingSettings{}, settings, &bw);
+    const SphereOnPlanePoints f;
+    const Scene& scene = f.scene;
+    const RadiancePointIntegrator& integrator = f.integrator;
     const double sigma_rho = 0.8566;  // Lambert's whole hemisphere
     // Eq. 4.3's f_V from a plan: none without occlusion, the full room at x = 1/2 when every
     // neighbour is occluded, and the occluded fraction of it when they are mixed (the upsampled
