@@ -183,9 +183,8 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
                                   }),
                    cast.end());
     } else {
-        const RadianceEstimate pilot = lighting_.estimate(sp, n_l, rng, &cast);
-        rp.rays += pilot.rays;
-        pilot_estimate = pilot;
+        pilot_estimate = lighting_.estimate(sp, n_l, rng, &cast);
+        rp.rays += pilot_estimate.rays;
     }
     rp.pilot_rays = int(cast.size());
     const bool distances = !plan || plan->own_distances || !(plan->occluded_fraction > 0.0);
@@ -206,7 +205,10 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
             environment_spin_, lighting, rp.B_t);
     }
     rp.N_omega = n_omega;
-    say(chain, "N_Omega = min(N_max, N_L + f_V) = %d", n_omega);
+    say(chain,
+        plan ? "N_Omega = %d as planned (the f_V above is the point's own, not used)"
+             : "N_Omega = min(N_max, N_L + f_V) = %d",
+        n_omega);
 
     // The estimate (see the header on reuse_pilot and plans).
     if (plan) {
@@ -222,8 +224,8 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
             rp.radiance = a * pilot.radiance + c * more.radiance;
             rp.variance = a * a * pilot.variance + c * c * more.variance;
         } else {
-            rp.radiance = pilot_estimate.radiance;
-            rp.variance = pilot_estimate.variance;
+            rp.radiance = pilot.radiance;
+            rp.variance = pilot.variance;
         }
     } else {
         const RadianceEstimate e = lighting_.estimate(sp, n_omega, rng);
