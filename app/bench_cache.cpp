@@ -1,10 +1,10 @@
 // `freqlab bench SCENE --study cache | cache-ablation`: method A's cache over an animation
 // (issue "Method A, part 3", acceptance 3 and 4).
 //
-// cache: `--method sparse` (the no-cache baseline) and `--method cache` over --frames, in that
-//   order in one process; RMSE against the reference every --error-every frames; the MIS
-//   baseline at equal time (equal_time_mis_spp at the cache's mean frame time) on the same
-//   frames. Writes regions.exr, bench_cache.csv (per frame),
+// cache: `--method sparse` (the no-cache baseline) and `--method cache` over --frames, frame by
+//   frame in turn (two renderers, so the machine's drift hits both alike); RMSE against the
+//   reference every --error-every frames; the MIS baseline at equal time (equal_time_mis_spp at the
+//   cache's mean frame time) on the same frames. Writes regions.exr, bench_cache.csv (per frame),
 //   bench_cache.json (summary over frames >= 5) and cumulative_time.png.
 // cache-ablation: the cache with and without the temporal test; RMSE over the pixels the moving
 //   shadows sweep: pixels whose first surface belongs to a static object in every frame and
@@ -20,6 +20,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 
 #include <tbb/parallel_for.h>
 #include <nlohmann/json.hpp>
@@ -149,27 +150,40 @@ int run_bench_cache(const BenchArgs& a) {
     long swept_pixels = 0, changed_pixels = 0;
     for (size_t i = 0; i < n; ++i) swept_pixels += swept[i], changed_pixels += changed[i];
 
-    auto run = [&](const std::string& label, RenderMethod method,
-                   const std::vector<std::string>& extra) {
-        std::vector<FrameRecord> out;
-        FrameRenderer renderer(scene, config_for(method, extra), device);
-        for (int f = first; f < last; ++f) {
-            FrameRecord rec;
-            rec.frame = f;
-            const FrameResult r = renderer.render(f, progress);
-            rec.stats = r.stats;
-            rec.time_ms = r.stats["time_ms"].get<double>();
-            if (auto it = reference.find(f); it != reference.end()) {
-                rec.rmse = compare_layers(r.layers, it->second).rmse;
-                rec.rmse_swept = rmse_over(r.layers.get("color"), it->second.get("color"), swept);
-                rec.rmse_changed =
-                    rmse_over(r.layers.get("color"), it->second.get("color"), changed);
-            }
-            std::fprintf(
-                stderr, "%s frame %d: %.0f ms%s\n", label.c_str(), f, rec.time_ms,
-                std::isfinite(rec.rmse) ? (", rmse " + std::to_string(rec.rmse)).c_str() : "");
-            out.push_back(std::move(rec));
+    auto render_record = [&](FrameRenderer& renderer, const std::string& label, int f) {
+        FrameRecord rec;
+        rec.frame = f;
+        const FrameResult r = renderer.render(f, progress);
+        rec.stats = r.stats;
+        rec.time_ms = r.stats["time_ms"].get<double>();
+        if (auto it = reference.find(f); it != reference.end()) {
+            rec.rmse = compare_layers(r.layers, it->second).rmse;
+            rec.rmse_swept = rmse_over(r.layers.get("color"), it->second.get("color"), swept);
+            rec.rmse_changed = rmse_over(r.layers.get("color"), it->second.get("color"), changed);
         }
+        std::fprintf(stderr, "%s frame %d: %.0f ms%s\n", label.c_str(), f, rec.time_ms,
+                     std::isfinite(rec.rmse) ? (", rmse " + std::to_string(rec.rmse)).c_str() : "");
+        return rec;
+    };
+    // The runs render frame by frame in turn (this machine's speed drifts by several percent
+    // between minutes: a whole run after another would carry that drift into the time ratio).
+    struct RunSpec {
+        std::string label;
+        RenderMethod method;
+        std::vector<std::string> extra;
+    };
+    auto run_interleaved = [&](const std::vector<RunSpec>& specs) {
+        std::vector<std::unique_ptr<FrameRenderer>> renderers;
+        for (const RunSpec& s : specs)
+            renderers.push_back(
+                std::make_unique<FrameRenderer>(scene, config_for(s.method, s.extra), device));
+        std::vector<std::pair<std::string, std::vector<FrameRecord>>> out;
+        for (const RunSpec& s : specs) out.push_back({s.label, {}});
+        for (int f = first; f < last; ++f)
+            for (size_t k = 0; k < specs.size(); ++k) {
+                FrameRecord rec = render_record(*renderers[k], specs[k].label, f);
+                out[k].second.push_back(std::move(rec));
+            }
         return out;
     };
     auto summary = [&](const std::vector<FrameRecord>& recs) {
@@ -224,9 +238,9 @@ int run_bench_cache(const BenchArgs& a) {
                    {"swept_pixels", swept_pixels},
                    {"changed_pixels", changed_pixels}};
     if (a.study == "cache-ablation") {
-        runs.push_back({"cache", run("cache", RenderMethod::Cache, {})});
-        runs.push_back({"cache_no_temporal", run("cache, no temporal test", RenderMethod::Cache,
-                                                 {"cache.test_temporal=false"})});
+        runs = run_interleaved(
+            {{"cache", RenderMethod::Cache, {}},
+             {"cache_no_temporal", RenderMethod::Cache, {"cache.test_temporal=false"}}});
         for (auto& [label, recs] : runs) report[label] = summary(recs);
         // The ratios over frames >= 5 (the cache's warm-up, as for the new-pixel rate): on the
         // first frame both runs are the same render (nothing is cached yet).
@@ -238,8 +252,8 @@ int run_bench_cache(const BenchArgs& a) {
         report["changed_rmse_with_over_without_temporal"] = ratio("mean_rmse_changed_from_frame_5");
         report["swept_rmse_with_over_without_temporal_all_frames"] = ratio("mean_rmse_swept");
     } else {
-        runs.push_back({"sparse", run("sparse", RenderMethod::Sparse, {})});
-        runs.push_back({"cache", run("cache", RenderMethod::Cache, {})});
+        runs = run_interleaved(
+            {{"sparse", RenderMethod::Sparse, {}}, {"cache", RenderMethod::Cache, {}}});
         for (auto& [label, recs] : runs) report[label] = summary(recs);
         const double t_cache = report["cache"]["mean_frame_ms"].get<double>();
         // MIS at equal time: the spp whose frame takes the cache's mean frame time.
