@@ -51,3 +51,27 @@ TEST(Determinism, SeedChangesTheJitterButNotTheCentreLayers) {
     EXPECT_EQ(a.get("depth").data, b.get("depth").data);
     EXPECT_NE(a.get("albedo").data, b.get("albedo").data);
 }
+
+// The shading methods shade the pixel-centre hits and cast no jittered G-buffer rays: their
+// albedo layer is the centre's (the one their textures multiply), the same for any seed, while
+// the gbuffer preview averages jittered rays.
+TEST(Determinism, ShadingMethodsTakeTheAlbedoOfTheCentreRay) {
+    const Scene scene = load_scene("builtin:default");
+    EmbreeDevice device(1);
+    auto render = [&](RenderMethod method, int seed) {
+        RenderConfig c;
+        c.method = method;
+        c.frame.width = 48;
+        c.frame.height = 32;
+        c.frame.seed = seed;
+        c.mis.spp = 2;
+        FrameRenderer r(scene, c, device);
+        Progress p;
+        return r.render(0, p);
+    };
+    const FrameResult a = render(RenderMethod::Mis, 0), b = render(RenderMethod::Mis, 99);
+    EXPECT_EQ(a.layers.get("albedo").data, b.layers.get("albedo").data);
+    const FrameResult g = render(RenderMethod::GBuffer, 0);
+    EXPECT_EQ(g.stats["rays"].get<long>(), 48L * 32L * (1 + RenderConfig{}.gbuffer.aa_samples));
+    EXPECT_NE(g.layers.get("albedo").data, a.layers.get("albedo").data);
+}
