@@ -180,10 +180,8 @@ int run_bench_cache(const BenchArgs& a) {
         std::vector<std::pair<std::string, std::vector<FrameRecord>>> out;
         for (const RunSpec& s : specs) out.push_back({s.label, {}});
         for (int f = first; f < last; ++f)
-            for (size_t k = 0; k < specs.size(); ++k) {
-                FrameRecord rec = render_record(*renderers[k], specs[k].label, f);
-                out[k].second.push_back(std::move(rec));
-            }
+            for (size_t k = 0; k < specs.size(); ++k)
+                out[k].second.push_back(render_record(*renderers[k], specs[k].label, f));
         return out;
     };
     auto summary = [&](const std::vector<FrameRecord>& recs) {

@@ -103,13 +103,9 @@ GBufferOutput render_gbuffer(const RayScene& rs, int frame, const FrameSettings&
                     }
                 }
             }
-        if (!antialiased) {
-            rays.fetch_add(tile_rays, std::memory_order_relaxed);
-            progress.advance();
-            return;
-        }
-        // Jittered AA samples, eight at a time per pixel; keys (seed, frame, pixel, sample).
-        for (int y = y0; y < y1; ++y)
+        // Jittered AA samples (when antialiased), eight at a time per pixel; keys (seed, frame,
+        // pixel, sample).
+        for (int y = y0; antialiased && y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
                 const size_t p = size_t(y) * w + x;
                 vec3 sum_color(0.0f), sum_albedo(0.0f);

@@ -47,6 +47,11 @@ void say(std::vector<std::string>* chain, const char* format, Args... args) {
     chain->push_back(buf);
 }
 
+// Eq. 4.3's extra samples at x = sigma_V / sigma_rho; `room` = N_max - N_L.
+double extra_samples(double x, int room) {
+    return room * std::exp(-0.5 * (x - 0.5) * (x - 0.5));
+}
+
 void say_matrix(std::vector<std::string>* chain, const char* name, const Mat2& m) {
     say(chain, "  %-16s [[%.6g, %.6g], [%.6g, %.6g]]", name, m[0][0], m[1][0], m[0][1], m[1][1]);
 }
@@ -165,7 +170,6 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
     // The samples the visibility statistics are gathered on: a pilot of N_L MIS samples, or,
     // with a plan, the first N_L of the planned estimate's own samples (the same distribution).
     std::vector<DirectLighting::CastSample> cast;
-    RadianceEstimate planned, pilot_estimate;
     int n_omega = n_l;
     if (plan) {
         const double f_v = planned_extra_samples(*plan, rp.sigma_rho, n_max - n_l);
@@ -174,17 +178,17 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
             "planned from neighbours: occluded fraction %.3f, sigma_V %.5f rad -> f_V = %.2f, "
             "N_Omega = %d (no pilot)",
             plan->occluded_fraction, plan->sigma_V, f_v, n_omega);
-        planned = lighting_.estimate(sp, n_omega, rng, &cast);
-        rp.rays += planned.rays;
+    }
+    // With a plan this is the point's whole estimate; without, its pilot.
+    const RadianceEstimate first = lighting_.estimate(sp, n_omega, rng, &cast);
+    rp.rays += first.rays;
+    if (plan) {
         const int n_env = (n_l + 1) / 2, n_brdf = n_l / 2;
         cast.erase(std::remove_if(cast.begin(), cast.end(),
                                   [&](const DirectLighting::CastSample& c) {
                                       return c.unit >= (c.brdf_strategy ? n_brdf : n_env);
                                   }),
                    cast.end());
-    } else {
-        pilot_estimate = lighting_.estimate(sp, n_l, rng, &cast);
-        rp.rays += pilot_estimate.rays;
     }
     rp.pilot_rays = int(cast.size());
     const bool distances = !plan || plan->own_distances || !(plan->occluded_fraction > 0.0);
@@ -212,10 +216,10 @@ RadiancePoint RadiancePointIntegrator::integrate(const ShadingPoint& sp, const P
 
     // The estimate (see the header on reuse_pilot and plans).
     if (plan) {
-        rp.radiance = planned.radiance;
-        rp.variance = planned.variance;
+        rp.radiance = first.radiance;
+        rp.variance = first.variance;
     } else if (settings_.reuse_pilot) {
-        const RadianceEstimate& pilot = pilot_estimate;
+        const RadianceEstimate& pilot = first;
         const int extra = n_omega - n_l;
         if (extra > 0) {
             const RadianceEstimate more = lighting_.estimate(sp, extra, rng);
@@ -249,8 +253,7 @@ double planned_extra_samples(const VisibilityPlan& plan, double sigma_rho, int r
     // The upsampled sigma_V averages unoccluded neighbours' zeros in: divided by the occluded
     // fraction it is the occluded neighbours' mean, the value a pilot here would see if it
     // found occlusion; that happens about `fraction` of the time.
-    const double x = plan.sigma_V / fraction / sigma_rho;
-    return fraction * room * std::exp(-0.5 * (x - 0.5) * (x - 0.5));
+    return fraction * extra_samples(plan.sigma_V / fraction / sigma_rho, room);
 }
 
 double RadiancePointIntegrator::visibility_statistics(
@@ -341,7 +344,7 @@ double RadiancePointIntegrator::visibility_statistics(
         rp.sigma_o[1] = sigma_q[1][0];
         rp.sigma_o[2] = sigma_q[1][1];
         const double x = rp.sigma_V / rp.sigma_rho;
-        f_v = (n_max - n_l) * std::exp(-0.5 * (x - 0.5) * (x - 0.5));
+        f_v = extra_samples(x, n_max - n_l);
         const double mu_t = glm::length(mean_p);
         const glm::dvec3 axis = mu_t > 0 ? mean_p / mu_t : mu;
         const double sigma_t = std::sqrt(std::max(glm::dot(axis, sigma_p * axis), 0.0));

@@ -32,8 +32,9 @@
 // | planned point   | (sparse pipeline, sparse.plan_samples) N_Omega = N_L + f_V with f_V from |
 // |                 | the neighbours' upsampled statistics (planned_extra_samples); no pilot:  |
 // |                 | one estimate of N_Omega samples, occlusion statistics on its first N_L,  |
-// |                 | t_min and B_t the occluded neighbours' (their distances are measured     |
-// |                 | only when no neighbour saw occlusion)                                    |
+// |                 | t_min and B_t the occluded neighbours' (the point measures its own only  |
+// |                 | for the cache, VisibilityPlan::own_distances, or when no neighbour saw   |
+// |                 | occlusion)                                                               |
 #pragma once
 
 #include <string>

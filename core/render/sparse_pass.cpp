@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "base/stopwatch.h"
 #include "render/cache_pass.h"
@@ -24,6 +25,22 @@ float log_luminance(const vec3& shading) {
 
 float finite_or_zero(double x) {
     return std::isfinite(x) ? float(x) : 0.0f;
+}
+
+// What the upsampled statistics say for a point here. Unoccluded neighbours hold t_min = the
+// large distance and B_t = 0: taken out, the means are the occluded neighbours' (what an
+// occluded point here would measure).
+VisibilityPlan plan_from_neighbours(const VisibilityStats& v, double large, bool own_distances) {
+    VisibilityPlan plan;
+    const double f = v[0];
+    plan.occluded_fraction = f;
+    plan.sigma_V = v[3];
+    plan.own_distances = own_distances;
+    if (f > 0) {
+        plan.t_min_occluded = std::exp((v[1] - (1.0 - f) * std::log(std::max(large, 1e-6))) / f);
+        plan.B_t_occluded = v[5] / f;
+    }
+    return plan;
 }
 
 vec3 demodulate(const vec3& radiance, const vec3& texture) {
@@ -111,16 +128,19 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
     std::vector<vec3> value(n, vec3(0.0f));
     std::vector<SampleKind> kind(n, SampleKind::None);
     std::atomic<long> rays{0};
-    // Adaptive points' sample counts planned from the upsampled statistics (filled after them).
-    std::vector<VisibilityPlan> plans;
-    std::vector<char> has_plan;
+    // The upsampled visibility statistics (step 2); adaptive points (pass 1) plan their sample
+    // count from them.
+    std::vector<VisibilityStats> stats;
+    std::vector<char> found;
     auto shade = [&](size_t i, uint64_t pass) {
         const int x = int(i % size_t(w)), y = int(i / size_t(w));
         CounterRng rng(uint64_t(fs.seed) ^ kPointsStream, uint64_t(frame), i, pass);
-        const VisibilityPlan* plan =
-            pass == 1 && !has_plan.empty() && has_plan[i] ? &plans[i] : nullptr;
+        std::optional<VisibilityPlan> plan;
+        if (pass == 1 && sparse.plan_samples && found[i] && !mirror[i])
+            plan = plan_from_neighbours(stats[i], integrator.large_distance(), cache != nullptr);
         RadiancePoint rp = integrator.integrate_hit(gb.hits[i], -gb.view_dirs[i],
-                                                    point_context(gb, x, y, rs.time()), rng, plan);
+                                                    point_context(gb, x, y, rs.time()), rng,
+                                                    plan ? &*plan : nullptr);
         if (!std::isfinite(rp.radiance.x + rp.radiance.y + rp.radiance.z)) rp = RadiancePoint{};
         rp.cone_samples.clear();
         rp.cone_samples.shrink_to_fit();
@@ -213,8 +233,6 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
             own[size_t(i)] = 1;
         }
     }
-    std::vector<VisibilityStats> stats;
-    std::vector<char> found;
     upsample_statistics(w, h, features, initial, values, k, stats, found);
     std::vector<float> mu_v(n, 0.0f), sigma_v(n, 0.0f);
     for (size_t i = 0; i < n; ++i) {
@@ -316,28 +334,6 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
         const float wanted = cache ? std::max(density[i] - coverage[i], 0.0f) : density[i];
         CounterRng rng(uint64_t(fs.seed) ^ kSparseStream, cache ? 0 : uint64_t(frame), i, 0);
         if (rejection_sample(wanted, rng)) adaptive.push_back(int(i));
-    }
-    if (sparse.plan_samples) {
-        const double large = integrator.large_distance();
-        plans.resize(n);
-        has_plan.assign(n, 0);
-        for (int i : adaptive)
-            if (found[size_t(i)] && !mirror[size_t(i)]) {
-                // Unoccluded neighbours hold t_min = the large distance and B_t = 0: taken
-                // out, the means are the occluded neighbours' (what an occluded point here
-                // would measure).
-                const VisibilityStats& v = stats[size_t(i)];
-                const double f = v[0], log_large = std::log(std::max(large, 1e-6));
-                VisibilityPlan& plan = plans[size_t(i)];
-                plan.occluded_fraction = f;
-                plan.sigma_V = v[3];
-                plan.own_distances = cache != nullptr;
-                if (f > 0) {
-                    plan.t_min_occluded = std::exp((v[1] - (1.0 - f) * log_large) / f);
-                    plan.B_t_occluded = v[5] / f;
-                }
-                has_plan[size_t(i)] = 1;
-            }
     }
     progress.begin_stage("adaptive radiance points", 1);
     shade_all(adaptive, 1);
