@@ -2,12 +2,20 @@
 // MIS baseline at equal per-pixel error (issue "Method A, part 1", acceptance 6).
 //
 // Per pixel i (hits only): the adaptive estimate's mean squared error against the reference over
-// --runs independent seeds (minus the reference's own variance), its mean ray count; the MIS
-// estimator's per-sample variance v_i and rays per sample r_i from one 64-spp render. MIS reaches
-// the adaptive error at N_i = v_i / MSE_i samples, so with rays N_i r_i. Reported:
+// --runs independent seeds, its mean ray count; the MIS estimator's per-sample variance v_i and
+// rays per sample r_i from one 256-spp render of plain (independent-sample) MIS, whose error
+// falls as 1/N. MIS reaches the adaptive error at N_i = v_i / MSE_i samples, so with rays
+// N_i r_i. Reported:
 //   - per pixel: adaptive rays / MIS rays at equal error (median, quartiles);
 //   - fixed N (one count for every pixel, as the baseline renders): the N that reaches the
-//     adaptive error on 50 / 90 / 95 % of the pixels, and its total rays over the adaptive's.
+//     adaptive error on 50 / 90 / 95 % of the pixels, and its total rays over the adaptive's;
+//   - at equal rays (the adaptive's total): the image RMSE of adaptive points, of plain MIS and
+//     of stratified MIS (mis.stratified), which separates what the per-point sample counts
+//     (allocation) buy from what stratified samples buy.
+// The ruler: the adaptive points' stratified samples reach errors below the noise of a 1024-spp
+// independent reference, so the reference here is stratified at --reference-spp (default 4096),
+// cached like any reference, and its variance is NOT subtracted from the measured error: the
+// adaptive error is over-stated by at most the reference's (reported as a share).
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -56,6 +64,9 @@ int run_bench(const BenchArgs& a) {
     if (a.frame < 0 || a.frame >= scene.frame_count)
         throw Error("--frame", std::to_string(a.frame), "expected a frame of the scene");
     EmbreeDevice device(0);
+    if (a.reference_spp < 64)
+        throw Error("--reference-spp", std::to_string(a.reference_spp), "expected at least 64");
+    constexpr int kVarianceSpp = 256;  // of the plain MIS render that gives v_i and r_i
     auto config_for = [&](RenderMethod method, int seed) {
         RenderConfig c;
         c.method = method;
@@ -64,7 +75,10 @@ int run_bench(const BenchArgs& a) {
         c.frame.width = w;
         c.frame.height = h;
         c.frame.seed = seed;
-        c.mis.spp = 64;
+        c.mis.spp = kVarianceSpp;
+        c.mis.stratified = false;  // the 1/N model of the fixed-N baseline
+        c.reference.spp = a.reference_spp;
+        c.reference.stratified = true;
         return c;
     };
     Progress progress;
@@ -74,7 +88,7 @@ int run_bench(const BenchArgs& a) {
     };
     std::fprintf(stderr, "reference...\n");
     const FrameResult ref = render(config_for(RenderMethod::Reference, 0));
-    std::fprintf(stderr, "MIS 64 spp...\n");
+    std::fprintf(stderr, "MIS %d spp...\n", kVarianceSpp);
     const FrameResult mis = render(config_for(RenderMethod::Mis, 1));
     std::vector<FrameResult> adaptive;
     for (int k = 0; k < a.runs; ++k) {
@@ -87,34 +101,59 @@ int run_bench(const BenchArgs& a) {
     const Layer& mis_var = mis.layers.get("variance");
     const Layer& mis_rays = mis.layers.get("rays");
     const Layer& depth = ref.layers.get("depth");
-    std::vector<double> ratio, needed_n, mse_a, rays_a_all, rays_per_sample;
+    auto lum = [](const Layer& c, size_t i) {
+        return 0.2126 * c.data[3 * i] + 0.7152 * c.data[3 * i + 1] + 0.0722 * c.data[3 * i + 2];
+    };
+    std::vector<size_t> pixels;
+    std::vector<double> ratio, needed_n, rays_a_all, reference_share;
     double total_rays_a = 0, total_rays_per_sample = 0;
     for (size_t i = 0; i < n; ++i) {
         if (!(depth.data[i] > 0) || !std::isfinite(depth.data[i])) continue;  // background
-        const double r_i = mis_rays.data[i] / 64.0, v_i = mis_var.data[i] * 64.0;
+        const double r_i = mis_rays.data[i] / kVarianceSpp, v_i = mis_var.data[i] * kVarianceSpp;
         if (!(r_i > 0) || !(v_i > 0)) continue;  // nothing to estimate (mirrors, unlit)
-        const double lum_ref = 0.2126 * ref_color.data[3 * i] + 0.7152 * ref_color.data[3 * i + 1] +
-                               0.0722 * ref_color.data[3 * i + 2];
-        double se = 0, rays = 0;
+        const double lum_ref = lum(ref_color, i);
+        double mse = 0, rays = 0;
         for (const FrameResult& r : adaptive) {
-            const Layer& c = r.layers.get("color");
-            const double lum =
-                0.2126 * c.data[3 * i] + 0.7152 * c.data[3 * i + 1] + 0.0722 * c.data[3 * i + 2];
-            se += (lum - lum_ref) * (lum - lum_ref);
+            const double d = lum(r.layers.get("color"), i) - lum_ref;
+            mse += d * d;
             rays += r.layers.get("rays").data[i];
         }
-        se = std::max(se / a.runs - ref_var.data[i], 1e-3 * v_i / 1024.0);
+        mse = std::max(mse / a.runs, 1e-12);
         rays /= a.runs;
-        const double n_i = v_i / se;
+        const double n_i = v_i / mse;
+        pixels.push_back(i);
         needed_n.push_back(n_i);
-        rays_per_sample.push_back(r_i);
         ratio.push_back(rays / (n_i * r_i));
-        mse_a.push_back(se);
         rays_a_all.push_back(rays);
+        // The reference's variance (the independent-sample formula: an upper bound for its
+        // stratified samples) as a share of the error measured against it.
+        reference_share.push_back(std::min(1.0, double(ref_var.data[i]) / mse));
         total_rays_a += rays;
         total_rays_per_sample += r_i;
     }
     if (ratio.empty()) throw Error(a.scene, "pixels", "no pixel with a surface to compare");
+
+    // Equal rays: fixed-N MIS with the adaptive points' total, plain and stratified.
+    const int equal_spp = std::max(1, int(std::lround(total_rays_a / total_rays_per_sample)));
+    auto image_rmse = [&](const FrameResult& r) {
+        double sum = 0;
+        for (size_t i : pixels) {
+            const double d = lum(r.layers.get("color"), i) - lum(ref_color, i);
+            sum += d * d;
+        }
+        return std::sqrt(sum / double(pixels.size()));
+    };
+    std::vector<double> adaptive_rmse;
+    for (const FrameResult& r : adaptive) adaptive_rmse.push_back(image_rmse(r));
+    json equal_rays = {{"spp", equal_spp},
+                       {"adaptive_rmse_median", percentile(adaptive_rmse, 0.5)}};
+    for (bool stratified : {false, true}) {
+        RenderConfig c = config_for(RenderMethod::Mis, 2 + int(stratified));
+        c.mis.spp = equal_spp;
+        c.mis.stratified = stratified;
+        std::fprintf(stderr, "MIS %d spp%s...\n", equal_spp, stratified ? ", stratified" : "");
+        equal_rays[stratified ? "stratified_mis_rmse" : "mis_rmse"] = image_rmse(render(c));
+    }
     json fixed = json::object();
     for (double q : {0.5, 0.9, 0.95}) {
         const double n_q = std::ceil(percentile(needed_n, q));
@@ -138,6 +177,13 @@ int run_bench(const BenchArgs& a) {
         {"mis_spp_needed_per_pixel",
          {{"median", percentile(needed_n, 0.5)}, {"p90", percentile(needed_n, 0.9)}}},
         {"fixed_n_mis_reaching_adaptive_error_on_pct_of_pixels", fixed},
+        {"equal_rays_image_rmse", equal_rays},
+        {"reference",
+         {{"spp", a.reference_spp},
+          {"stratified", true},
+          {"variance_share_of_adaptive_error",
+           {{"median", percentile(reference_share, 0.5)},
+            {"p90", percentile(reference_share, 0.9)}}}}},
         {"settings", config_for(RenderMethod::Points, 0).settings_group().to_json()}};
     std::error_code ec;
     fs::create_directories(a.out, ec);

@@ -39,7 +39,7 @@ struct BenchArgs {
     std::string out = "freqlab-out/bench";
     std::string frames;        // cache studies: A:B (default: every frame of the scene)
     int error_every = 10;      // cache studies: RMSE against the reference on every k-th frame
-    int reference_spp = 4096;  // bake study: the VPT reference
+    int reference_spp = 4096;  // points: the stratified reference; bake: the VPT reference
     int max_spp = 1024;        // bake study: impulse and extinction curves
     int overhead_spp = 64;     // bake study: equal-sample overhead and re-bake
 };

@@ -165,7 +165,8 @@ int main(int argc, char** argv) {
     bench->add_option("--size", ba.size, "WxH");
     bench->add_option("--runs", ba.runs,
                       "points: independent adaptive renders per pixel error; sparse: timed runs");
-    bench->add_option("--reference-spp", ba.reference_spp, "bake study: VPT reference samples");
+    bench->add_option("--reference-spp", ba.reference_spp,
+                      "points: stratified reference samples; bake study: VPT reference samples");
     bench->add_option("--max-spp", ba.max_spp, "bake study: impulse / extinction curve length");
     bench->add_option("--overhead-spp", ba.overhead_spp,
                       "bake study: samples of the overhead and re-bake runs");

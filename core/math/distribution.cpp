@@ -31,6 +31,39 @@ Distribution2D::Distribution2D(const std::vector<float>& weights, int width, int
         }
     }
     // Leftovers are 1 up to rounding: they keep themselves (keep = 1 already).
+
+    // The inversion tables, on the same (float) densities the alias table and pdf() use.
+    row_cdf_.assign(size_t(height) + 1, 0.0);
+    column_cdf_.assign(size_t(height) * (size_t(width) + 1), 0.0);
+    for (int y = 0; y < height; ++y) {
+        double* row = &column_cdf_[size_t(y) * (size_t(width) + 1)];
+        for (int x = 0; x < width; ++x) row[x + 1] = row[x] + pdf_[size_t(y) * width + x];
+        row_cdf_[size_t(y) + 1] = row_cdf_[size_t(y)] + row[width];
+        if (row[width] > 0.0)
+            for (int x = 1; x <= width; ++x) row[x] /= row[width];
+    }
+    for (double& v : row_cdf_) v /= row_cdf_.back();
+}
+
+namespace {
+
+// The step i with cdf[i] <= u < cdf[i + 1] (so never a step of zero mass) and where u falls
+// in it, for u in [0, 1) and cdf running from 0 to 1.
+int invert_step(const double* cdf, int steps, double u, float* fraction) {
+    const int i =
+        std::clamp(int(std::upper_bound(cdf, cdf + steps + 1, u) - cdf) - 1, 0, steps - 1);
+    const double mass = cdf[i + 1] - cdf[i];
+    *fraction = mass > 0.0 ? std::min(float((u - cdf[i]) / mass), 0x1.fffffep-1f) : 0.5f;
+    return i;
+}
+
+}  // namespace
+
+int Distribution2D::sample_texel_inverted(vec2 u, vec2* within) const {
+    const int y = invert_step(row_cdf_.data(), height_, double(u.y), &within->y);
+    const int x = invert_step(&column_cdf_[size_t(y) * (size_t(width_) + 1)], width_, double(u.x),
+                              &within->x);
+    return y * width_ + x;
 }
 
 int Distribution2D::sample_texel(const vec4& u) const {

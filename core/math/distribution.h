@@ -1,5 +1,5 @@
 // A piecewise-constant 2D distribution, used for environment-map importance sampling. Built
-// once per map; sampling is O(1).
+// once per map; sampling is O(1) by alias table, or O(log) by inverting the CDFs.
 #pragma once
 
 #include <algorithm>
@@ -24,6 +24,11 @@ class Distribution2D {
     // The texel index sample() picks (one alias-table read), and where in it sample() lands.
     int sample_texel(const vec4& u) const;
     vec2 texel_point(int texel, const vec4& u) const;
+    // Continuous inversion of the rows' marginal CDF (u.y) and the row's conditional CDF
+    // (u.x): nearby u land nearby, so stratified u stay stratified over the map (the alias
+    // table scatters them). Same density as sample_texel(); `within` is the position inside
+    // the texel, what texel_point() takes as (u.z, u.w).
+    int sample_texel_inverted(vec2 u, vec2* within) const;
     // Starts loading the alias entry sample_texel(u) will read: a loop over many samples can
     // overlap those cache misses.
     void prefetch(const vec4& u) const { __builtin_prefetch(&alias_[alias_slot(u)]); }
@@ -45,6 +50,10 @@ class Distribution2D {
     };
     std::vector<float> pdf_;         // density over [0,1)^2 of each texel
     std::vector<AliasEntry> alias_;  // packed: one cache line per draw, not two
+    // Double precision so that a dim texel keeps its own mass (a float sum of a 2048-texel row
+    // rounds masses below ~1e-7 of the row away).
+    std::vector<double> row_cdf_;     // height + 1 entries, 0 ... 1
+    std::vector<double> column_cdf_;  // per row width + 1 entries, 0 ... 1 (rows with mass)
 };
 
 }  // namespace freqlab

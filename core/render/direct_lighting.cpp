@@ -3,6 +3,8 @@
 #include <cmath>
 #include <vector>
 
+#include "math/sobol.h"
+
 namespace freqlab {
 
 namespace {
@@ -49,8 +51,9 @@ float variance_of_mean(const std::vector<vec3>& units, int n) {
 
 }  // namespace
 
-DirectLighting::DirectLighting(const RayScene& scene, const ShadingSettings& settings)
-    : scene_(scene), environment_(scene.environment()), settings_(settings) {
+DirectLighting::DirectLighting(const RayScene& scene, const ShadingSettings& settings,
+                               SampleSequence sequence)
+    : scene_(scene), environment_(scene.environment()), settings_(settings), sequence_(sequence) {
     for (const Light& l : scene.scene().lights)
         if (!l.environment) lights_.push_back(&l);
 }
@@ -117,12 +120,27 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
                                            other_pdf, w, value, false});
     };
 
+    // Stratified: the strategies' sequences are seeded from the stream first (the independent
+    // path draws nothing here, so its numbers are what they always were).
+    const bool sobol = sequence_ == SampleSequence::ScrambledSobol;
+    uint32_t seeds[4] = {0, 0, 0, 0};
+    if (sobol)
+        for (uint32_t& seed : seeds) seed = rng.next_u32();
+    const ScrambledSobol2D env_points(seeds[0], seeds[1]), brdf_points(seeds[2], seeds[3]);
+
     // The random numbers first (same order as drawing them inside the loop), so that the
     // environment's table reads of all samples can be in flight together.
     s.env_u.clear();
+    s.env_texel.clear();
     s.light_u.clear();
     for (int i = 0; i < n_env; ++i) {
-        if (environment_) {
+        if (environment_ && sobol) {
+            const vec2 p = env_points.at(uint32_t(i));
+            vec2 within;
+            s.env_texel.push_back(environment_->sample_texel_inverted(p, &within));
+            s.env_u.emplace_back(p, within);
+            environment_->prefetch_texel(s.env_texel.back());
+        } else if (environment_) {
             const vec4 u(rng.next_float(), rng.next_float(), rng.next_float(), rng.next_float());
             s.env_u.push_back(u);
             environment_->prefetch_alias(u);
@@ -133,10 +151,12 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
                 s.light_u.emplace_back(u1, u2);
             }
     }
-    s.env_texel.resize(s.env_u.size());
-    for (size_t i = 0; i < s.env_u.size(); ++i) {
-        s.env_texel[i] = environment_->sample_texel(s.env_u[i]);
-        environment_->prefetch_texel(s.env_texel[i]);
+    if (!sobol) {
+        s.env_texel.resize(s.env_u.size());
+        for (size_t i = 0; i < s.env_u.size(); ++i) {
+            s.env_texel[i] = environment_->sample_texel(s.env_u[i]);
+            environment_->prefetch_texel(s.env_texel[i]);
+        }
     }
     size_t next_light_u = 0;
     for (int i = 0; i < n_env; ++i) {
@@ -187,8 +207,14 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
     s.brdf_texel.resize(size_t(n_brdf));
     s.brdf_uv.resize(size_t(n_brdf));
     for (int j = 0; j < n_brdf; ++j) {
-        const float u1 = rng.next_float(), u2 = rng.next_float();
-        s.brdf_samples.push_back(brdf.sample(sp.wo, u1, u2));
+        vec2 u;
+        if (sobol) {
+            u = brdf_points.at(uint32_t(j));
+        } else {
+            u.x = rng.next_float();
+            u.y = rng.next_float();
+        }
+        s.brdf_samples.push_back(brdf.sample(sp.wo, u.x, u.y));
         const BrdfSample& bs = s.brdf_samples.back();
         if (bs.pdf <= 0.0f || glm::dot(bs.wi, ns) <= 0.0f) continue;
         s.brdf_texel[size_t(j)] = environment_->texel_of(bs.wi, &s.brdf_uv[size_t(j)]);

@@ -14,7 +14,13 @@
 // | textures                  | the albedo at the hit scales the BRDF exactly                |
 //
 // The variance returned is that of the estimate (of its luminance): s²_env / n_env +
-// s²_brdf / n_brdf from the per-sample terms; 0 when a strategy has fewer than 2 samples.
+// s²_brdf / n_brdf from the per-sample terms; 0 when a strategy has fewer than 2 samples
+// (with stratified samples that is the independent-sample formula: an over-estimate).
+//
+// Sample sequences: Independent draws every uniform from the pixel's counter stream (the
+// environment through its alias table). ScrambledSobol gives each strategy one Owen-scrambled
+// 2D Sobol sequence (math/sobol.h), seeded from the stream, and inverts the environment's
+// CDFs instead, so the samples stay stratified over the sphere; quad lights stay independent.
 #pragma once
 
 #include "accel/ray_scene.h"
@@ -23,6 +29,8 @@
 #include "settings/shading_settings.h"
 
 namespace freqlab {
+
+enum class SampleSequence { Independent, ScrambledSobol };
 
 struct RadianceEstimate {
     vec3 radiance{0.0f};
@@ -42,7 +50,8 @@ struct ShadingPoint {
 
 class DirectLighting {
   public:
-    DirectLighting(const RayScene& scene, const ShadingSettings& settings);
+    DirectLighting(const RayScene& scene, const ShadingSettings& settings,
+                   SampleSequence sequence = SampleSequence::Independent);
 
     // Radiance along `ray` (towards its origin): the environment when it escapes, mirrors
     // followed, and the direct-lighting estimate with `spp` samples at the first non-mirror hit.
@@ -81,6 +90,7 @@ class DirectLighting {
     const EnvironmentMap* environment_;
     std::vector<const Light*> lights_;  // point, directional, quad
     ShadingSettings settings_;
+    SampleSequence sequence_;
     std::vector<Ray>* recorded_ = nullptr;
     std::vector<SampleTrace>* traced_ = nullptr;
 };

@@ -90,6 +90,9 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
         for (const char* group : {"frame", "gbuffer", "shading", "reference"})
             settings[group] = all.at(group);
         settings["reference"].erase("use_cache");
+        // Absent when off, so that references cached before the setting existed still match.
+        if (!settings["reference"].value("stratified", false))
+            settings["reference"].erase("stratified");
         settings["frame"].erase("exposure");  // display only
         cache_key = cache_.key(scene_.content_hash, settings, frame);
         if (std::optional<LayerSet> cached = cache_.load(cache_key)) {
@@ -135,9 +138,12 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
 
     if (config_.method == RenderMethod::Mis || config_.method == RenderMethod::Reference) {
         t0 = Clock::now();
-        const ShadingPassOutput out =
-            shade_pixels(ray_scene_, gb.gbuffer, frame, config_.frame, config_.spp(),
-                         config_.shading, result.layers, progress);
+        const bool stratified = config_.method == RenderMethod::Mis ? config_.mis.stratified
+                                                                    : config_.reference.stratified;
+        const ShadingPassOutput out = shade_pixels(
+            ray_scene_, gb.gbuffer, frame, config_.frame, config_.spp(), config_.shading,
+            stratified ? SampleSequence::ScrambledSobol : SampleSequence::Independent,
+            result.layers, progress);
         stages["shading"] = ms_since(t0);
         rays += out.rays;
         guarded = out.nonfinite;

@@ -45,7 +45,8 @@ PointsPassOutput render_points(const RayScene& scene, const GBuffer& gb, int fra
     Layer& color =
         layers.add("color", LayerKind::Color, 3, "direct lighting, adaptive radiance points");
     Layer& variance = layers.add("variance", LayerKind::Continuous, 1,
-                                 "variance of the point's luminance estimate");
+                                 "variance of the point's luminance estimate (the independent-"
+                                 "sample formula: an upper bound with stratified samples)");
     const char* descriptions[] = {
         "environment bandwidth in the BRDF footprint (cycles/rad)",
         "BRDF footprint's angular standard deviation (rad)",

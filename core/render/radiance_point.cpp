@@ -74,7 +74,11 @@ RadiancePointIntegrator::RadiancePointIntegrator(const RayScene& scene,
                                                  const ShadingSettings& shading,
                                                  const PointsSettings& settings,
                                                  const EnvBandwidthHierarchy* bandwidth)
-    : scene_(scene), lighting_(scene, shading), settings_(settings), bandwidth_(bandwidth) {
+    : scene_(scene),
+      lighting_(scene, shading,
+                settings.stratified ? SampleSequence::ScrambledSobol : SampleSequence::Independent),
+      settings_(settings),
+      bandwidth_(bandwidth) {
     const double radius = 0.5 * glm::length(glm::dvec3(scene.bounds_max() - scene.bounds_min()));
     large_distance_ = settings.large_distance * std::max(radius, 1e-3);
     mirror_depth_ = shading.mirror_depth;

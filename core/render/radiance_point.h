@@ -27,6 +27,10 @@
 // |                 | over occluded pilot samples, |v'| the occluder's angular speed relative  |
 // |                 | to the receiver; 0 when nothing occluding moves (the environment is      |
 // |                 | static in the scene model, so its rotation term omega B_L is 0)          |
+// | samples         | points.stratified (default): each strategy's 2D samples are an Owen-      |
+// |                 | scrambled Sobol sequence (the environment by CDF inversion), so N_Omega  |
+// |                 | samples cover the footprint evenly as a sampling rate assumes; any prefix |
+// |                 | (the pilot's or the plan's first N_L) is itself well stratified           |
 // | estimate        | points.reuse_pilot off: N_Omega fresh MIS samples (the pilot only         |
 // |                 | decides, so the count cannot bias the mean); on: the seed's reuse        |
 // | planned point   | (sparse pipeline, sparse.plan_samples) N_Omega = N_L + f_V with f_V from |

@@ -9,11 +9,12 @@ namespace freqlab {
 
 ShadingPassOutput shade_pixels(const RayScene& scene, const GBuffer& gb, int frame,
                                const FrameSettings& fs, int spp, const ShadingSettings& shading,
-                               LayerSet& layers, Progress& progress) {
-    const DirectLighting lighting(scene, shading);
+                               SampleSequence sequence, LayerSet& layers, Progress& progress) {
+    const DirectLighting lighting(scene, shading, sequence);
     Layer& color = layers.add("color", LayerKind::Color, 3, "direct lighting, MIS estimate");
     Layer& variance = layers.add("variance", LayerKind::Continuous, 1,
-                                 "variance of the pixel's luminance estimate");
+                                 "variance of the pixel's luminance estimate (the independent-"
+                                 "sample formula: an upper bound with mis.stratified)");
     Layer& ray_count = layers.add("rays", LayerKind::Continuous, 1, "rays cast for the pixel");
     const int w = gb.width, h = gb.height;
     const int rows_per_task = 4;

@@ -17,8 +17,8 @@ struct ShadingPassOutput {
 // Writes `color` (radiance) and `variance` (of each pixel's luminance estimate) into `layers`.
 ShadingPassOutput shade_pixels(const RayScene& scene, const GBuffer& gbuffer, int frame,
                                const FrameSettings& frame_settings, int spp,
-                               const ShadingSettings& shading, LayerSet& layers,
-                               Progress& progress);
+                               const ShadingSettings& shading, SampleSequence sequence,
+                               LayerSet& layers, Progress& progress);
 
 // Purpose tags folded into the seed so that streams of different passes never coincide.
 constexpr uint64_t kShadingStream = 0x5348414445ULL;  // "SHADE"

@@ -40,6 +40,11 @@ class EnvironmentMap {
     // sparse frame). sample_at(sample_texel(u), u) == sample(u).
     void prefetch_alias(const vec4& u) const { distribution_.prefetch(u); }
     int sample_texel(const vec4& u) const { return distribution_.sample_texel(u); }
+    // The texel by CDF inversion (stratified u stay stratified); sample_at(texel,
+    // vec4(u, *within)) then gives the direction, with the same density as sample().
+    int sample_texel_inverted(vec2 u, vec2* within) const {
+        return distribution_.sample_texel_inverted(u, within);
+    }
     void prefetch_texel(int texel) const { __builtin_prefetch(&texels_[size_t(texel)]); }
     vec3 sample_at(int texel, const vec4& u, vec3* direction, float* pdf) const;
     // The texel holding `direction` and its (u, v); eval_with_pdf_at(texel_of(d, &uv), uv)

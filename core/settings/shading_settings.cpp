@@ -9,6 +9,10 @@ const SettingsSchema& MisSettings::schema() {
                    "Spherical samples per pixel, half drawn from the environment's pdf and half "
                    "from the BRDF's, combined with the power heuristic (seed Premier §4, §7). "
                    "An odd count gives the environment the extra sample.")
+            .field(&MisSettings::stratified, "stratified", 0, 1, "", kInvalidatesShading,
+                   "Draw each strategy's samples from an Owen-scrambled Sobol sequence (the "
+                   "environment by CDF inversion) instead of independently. Off by default: the "
+                   "baseline is plain MIS, the estimator the reference converges.")
             .build();
     return s;
 }
@@ -21,6 +25,11 @@ const SettingsSchema& ReferenceSettings::schema() {
             .field(&ReferenceSettings::use_cache, "use_cache", 0, 1, "", kInvalidatesNothing,
                    "Reuse a reference rendered before with the same scene text and settings "
                    "(cached under $FREQLAB_CACHE_DIR, default ~/.cache/freqlab).")
+            .field(&ReferenceSettings::stratified, "stratified", 0, 1, "", kInvalidatesShading,
+                   "Owen-scrambled Sobol samples: the same unbiased estimate with far less "
+                   "noise where the integrand is smooth. Off by default (the reference is plain "
+                   "MIS); `bench --study points` turns it on to measure errors below what a "
+                   "1024-spp independent reference resolves.")
             .build();
     return s;
 }
@@ -51,6 +60,11 @@ const SettingsSchema& PointsSettings::schema() {
                    "Average the N_L pilot samples into the estimate as the seed does. The "
                    "sample count then depends on the samples it averages, which biases the "
                    "estimate; off, the pilot only decides and N_Omega fresh samples estimate.")
+            .field(&PointsSettings::stratified, "stratified", 0, 1, "", kInvalidatesShading,
+                   "Draw each strategy's samples from an Owen-scrambled Sobol sequence (the "
+                   "environment by CDF inversion): N_Omega = 4 B^2 is a sampling rate, which "
+                   "stratified samples honour and independent ones only on average. Each point "
+                   "stays uniform, so the estimate stays unbiased.")
             .build();
     return s;
 }

@@ -7,12 +7,14 @@ namespace freqlab {
 
 struct MisSettings {
     int spp = 16;  // spherical samples per pixel, split evenly between environment and BRDF
+    bool stratified = false;  // Owen-scrambled Sobol samples instead of independent ones
     static const SettingsSchema& schema();
 };
 
 struct ReferenceSettings {
     int spp = 1024;
     bool use_cache = true;
+    bool stratified = false;  // Owen-scrambled Sobol samples (benches that need a finer ruler)
     static const SettingsSchema& schema();
 };
 
@@ -24,6 +26,7 @@ struct PointsSettings {
     int stride = 1;         // a radiance point every `stride` pixels in x and y
     float large_distance = 10.0f;  // x the scene's bounding radius: t_min when nothing occludes
     bool reuse_pilot = false;      // the seed's reuse of the N_L pilot samples (biased, see .cpp)
+    bool stratified = true;        // Owen-scrambled Sobol samples per strategy (math/sobol.h)
     static const SettingsSchema& schema();
 };
 
