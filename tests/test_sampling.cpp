@@ -162,7 +162,7 @@ std::shared_ptr<const RgbImage> test_map() {
 
 }  // namespace
 
-TEST(Sampling, EnvironmentSamplesFollowTexelProbabilities) {
+static void check_environment_samples(bool inverted) {
     const EnvironmentMap env("test", test_map(), 37.0f, 1.0f);
     const int n = 1000000;
     const int w = env.distribution().width(), h = env.distribution().height();
@@ -174,8 +174,15 @@ TEST(Sampling, EnvironmentSamplesFollowTexelProbabilities) {
     for (int i = 0; i < n; ++i) {
         vec3 d;
         float pdf;
-        const vec3 radiance = env.sample(
-            vec4(rng.next_float(), rng.next_float(), rng.next_float(), rng.next_float()), &d, &pdf);
+        const vec4 u(rng.next_float(), rng.next_float(), rng.next_float(), rng.next_float());
+        vec3 radiance;
+        if (inverted) {
+            vec2 within;
+            const int texel = env.sample_texel_inverted(vec2(u), &within);
+            radiance = env.sample_at(texel, vec4(0.0f, 0.0f, within), &d, &pdf);
+        } else {
+            radiance = env.sample(u, &d, &pdf);
+        }
         ASSERT_GT(pdf, 0.0f);
         // The staged lookup (texel_of, eval_with_pdf_at) of the sampled direction gives back
         // the sample's density and radiance.
@@ -194,6 +201,15 @@ TEST(Sampling, EnvironmentSamplesFollowTexelProbabilities) {
             expected[size_t(y) * w + x] = n * env.distribution().texel_probability(x, y);
     double chi2;
     EXPECT_GT(test::chi_square_p_value(observed, expected, &chi2), 1e-3) << "chi2 = " << chi2;
+}
+
+// Both ways of drawing a texel: the alias table (independent samples) and the CDF inversion
+// (stratified samples; here fed independent uniforms, so chi-square applies).
+TEST(Sampling, EnvironmentSamplesFollowTexelProbabilities) {
+    for (bool inverted : {false, true}) {
+        SCOPED_TRACE(inverted ? "CDF inversion" : "alias table");
+        check_environment_samples(inverted);
+    }
 }
 
 TEST(Sampling, EnvironmentPdfIntegratesToOneAndCoversTheRadiance) {

@@ -4,6 +4,39 @@
 
 namespace freqlab {
 
+namespace {
+
+// guide[g] = the step i with cdf[i] <= g / steps < cdf[i + 1].
+template <class Index>
+void build_guide(const double* cdf, int steps, Index* guide) {
+    int i = 0;
+    for (int g = 0; g < steps; ++g) {
+        const double t = double(g) / steps;
+        while (i + 1 < steps && cdf[i + 1] <= t) ++i;
+        guide[g] = Index(i);
+    }
+}
+
+// The step i with cdf[i] <= u < cdf[i + 1] (so never a step of zero mass) and where u falls
+// in it, for u in [0, 1) and cdf running from 0 to 1: walked from `start` (a guide's entry,
+// never past the answer), or binary-searched when start < 0.
+int invert_step(const double* cdf, int steps, int start, double u, float* fraction) {
+    int i = start;
+    if (i >= 0)
+        while (i + 1 < steps && cdf[i + 1] <= u) ++i;
+    else
+        i = std::clamp(int(std::upper_bound(cdf, cdf + steps + 1, u) - cdf) - 1, 0, steps - 1);
+    const double mass = cdf[i + 1] - cdf[i];
+    *fraction = mass > 0.0 ? std::min(float((u - cdf[i]) / mass), 0x1.fffffep-1f) : 0.5f;
+    return i;
+}
+
+size_t guide_slot(float u, int steps) {
+    return size_t(std::min(int(u * float(steps)), steps - 1));
+}
+
+}  // namespace
+
 Distribution2D::Distribution2D(const std::vector<float>& weights, int width, int height)
     : width_(width), height_(height) {
     const size_t n = size_t(width) * height;
@@ -43,27 +76,45 @@ Distribution2D::Distribution2D(const std::vector<float>& weights, int width, int
             for (int x = 1; x <= width; ++x) row[x] /= row[width];
     }
     for (double& v : row_cdf_) v /= row_cdf_.back();
+    row_guide_.resize(size_t(height));
+    build_guide(row_cdf_.data(), height, row_guide_.data());
+    if (width <= 65535) {
+        column_guide_.resize(size_t(height) * width);
+        for (int y = 0; y < height; ++y)
+            build_guide(&column_cdf_[size_t(y) * (size_t(width) + 1)], width,
+                        &column_guide_[size_t(y) * width]);
+    }
 }
 
-namespace {
-
-// The step i with cdf[i] <= u < cdf[i + 1] (so never a step of zero mass) and where u falls
-// in it, for u in [0, 1) and cdf running from 0 to 1.
-int invert_step(const double* cdf, int steps, double u, float* fraction) {
-    const int i =
-        std::clamp(int(std::upper_bound(cdf, cdf + steps + 1, u) - cdf) - 1, 0, steps - 1);
-    const double mass = cdf[i + 1] - cdf[i];
-    *fraction = mass > 0.0 ? std::min(float((u - cdf[i]) / mass), 0x1.fffffep-1f) : 0.5f;
-    return i;
+Distribution2D::Inversion Distribution2D::invert_begin(vec2 u) const {
+    Inversion s;
+    s.u_x = u.x;
+    s.row = invert_step(row_cdf_.data(), height_, int(row_guide_[guide_slot(u.y, height_)]),
+                        double(u.y), &s.within.y);
+    s.column = -1;
+    if (!column_guide_.empty())
+        __builtin_prefetch(
+            &column_guide_[size_t(s.row) * size_t(width_) + guide_slot(u.x, width_)]);
+    return s;
 }
 
-}  // namespace
+void Distribution2D::invert_guide(Inversion& s) const {
+    if (column_guide_.empty()) return;
+    s.column = column_guide_[size_t(s.row) * size_t(width_) + guide_slot(s.u_x, width_)];
+    __builtin_prefetch(&column_cdf_[size_t(s.row) * (size_t(width_) + 1) + size_t(s.column)]);
+}
+
+int Distribution2D::invert_finish(Inversion& s) const {
+    const double* cdf = &column_cdf_[size_t(s.row) * (size_t(width_) + 1)];
+    return s.row * width_ + invert_step(cdf, width_, s.column, double(s.u_x), &s.within.x);
+}
 
 int Distribution2D::sample_texel_inverted(vec2 u, vec2* within) const {
-    const int y = invert_step(row_cdf_.data(), height_, double(u.y), &within->y);
-    const int x = invert_step(&column_cdf_[size_t(y) * (size_t(width_) + 1)], width_, double(u.x),
-                              &within->x);
-    return y * width_ + x;
+    Inversion s = invert_begin(u);
+    invert_guide(s);
+    const int texel = invert_finish(s);
+    *within = s.within;
+    return texel;
 }
 
 int Distribution2D::sample_texel(const vec4& u) const {

@@ -22,6 +22,7 @@ struct Scratch {
     std::vector<vec4> env_u;
     std::vector<vec2> light_u;
     std::vector<int> env_texel;
+    std::vector<Distribution2D::Inversion> inversions;  // stratified environment samples
     std::vector<BrdfSample> brdf_samples;
     std::vector<int> brdf_texel;
     std::vector<vec2> brdf_uv;
@@ -133,13 +134,22 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
     s.env_u.clear();
     s.env_texel.clear();
     s.light_u.clear();
+    if (environment_ && sobol) {
+        // CDF inversion in stages across all samples (each stage prefetches the next's reads).
+        s.inversions.clear();
+        for (int i = 0; i < n_env; ++i)
+            s.inversions.push_back(environment_->invert_begin(env_points.at(uint32_t(i))));
+        for (Distribution2D::Inversion& inv : s.inversions) environment_->invert_guide(inv);
+        for (Distribution2D::Inversion& inv : s.inversions) {
+            s.env_texel.push_back(environment_->invert_finish(inv));
+            environment_->prefetch_texel(s.env_texel.back());
+        }
+    }
     for (int i = 0; i < n_env; ++i) {
         if (environment_ && sobol) {
-            const vec2 p = env_points.at(uint32_t(i));
-            vec2 within;
-            s.env_texel.push_back(environment_->sample_texel_inverted(p, &within));
-            s.env_u.emplace_back(p, within);
-            environment_->prefetch_texel(s.env_texel.back());
+            const Distribution2D::Inversion& inv = s.inversions[size_t(i)];
+            // The texel is chosen; only zw (the place inside it) are read from here on.
+            s.env_u.emplace_back(0.0f, 0.0f, inv.within);
         } else if (environment_) {
             const vec4 u(rng.next_float(), rng.next_float(), rng.next_float(), rng.next_float());
             s.env_u.push_back(u);

@@ -45,6 +45,10 @@ class EnvironmentMap {
     int sample_texel_inverted(vec2 u, vec2* within) const {
         return distribution_.sample_texel_inverted(u, within);
     }
+    // Its stages (Distribution2D::Inversion), for loops that overlap the samples' misses.
+    Distribution2D::Inversion invert_begin(vec2 u) const { return distribution_.invert_begin(u); }
+    void invert_guide(Distribution2D::Inversion& s) const { distribution_.invert_guide(s); }
+    int invert_finish(Distribution2D::Inversion& s) const { return distribution_.invert_finish(s); }
     void prefetch_texel(int texel) const { __builtin_prefetch(&texels_[size_t(texel)]); }
     vec3 sample_at(int texel, const vec4& u, vec3* direction, float* pdf) const;
     // The texel holding `direction` and its (u, v); eval_with_pdf_at(texel_of(d, &uv), uv)
