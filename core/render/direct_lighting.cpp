@@ -143,14 +143,12 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
         for (Distribution2D::Inversion& inv : s.inversions) {
             s.env_texel.push_back(environment_->invert_finish(inv));
             environment_->prefetch_texel(s.env_texel.back());
+            // The texel is chosen; only zw (the place inside it) are read from here on.
+            s.env_u.emplace_back(0.0f, 0.0f, inv.within);
         }
     }
     for (int i = 0; i < n_env; ++i) {
-        if (environment_ && sobol) {
-            const Distribution2D::Inversion& inv = s.inversions[size_t(i)];
-            // The texel is chosen; only zw (the place inside it) are read from here on.
-            s.env_u.emplace_back(0.0f, 0.0f, inv.within);
-        } else if (environment_) {
+        if (environment_ && !sobol) {
             const vec4 u(rng.next_float(), rng.next_float(), rng.next_float(), rng.next_float());
             s.env_u.push_back(u);
             environment_->prefetch_alias(u);

@@ -31,6 +31,9 @@
 namespace freqlab {
 
 enum class SampleSequence { Independent, ScrambledSobol };
+inline SampleSequence sample_sequence(bool stratified) {
+    return stratified ? SampleSequence::ScrambledSobol : SampleSequence::Independent;
+}
 
 struct RadianceEstimate {
     vec3 radiance{0.0f};

@@ -40,6 +40,12 @@ SettingsGroup RenderConfig::settings_group() {
     return g;
 }
 
+SampleSequence RenderConfig::sequence() const {
+    if (method == RenderMethod::Mis) return sample_sequence(mis.stratified);
+    if (method == RenderMethod::Reference) return sample_sequence(reference.stratified);
+    return sample_sequence(points.stratified);
+}
+
 int RenderConfig::spp() const {
     switch (method) {
         case RenderMethod::Mis:
@@ -138,12 +144,9 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
 
     if (config_.method == RenderMethod::Mis || config_.method == RenderMethod::Reference) {
         t0 = Clock::now();
-        const bool stratified = config_.method == RenderMethod::Mis ? config_.mis.stratified
-                                                                    : config_.reference.stratified;
-        const ShadingPassOutput out = shade_pixels(
-            ray_scene_, gb.gbuffer, frame, config_.frame, config_.spp(), config_.shading,
-            stratified ? SampleSequence::ScrambledSobol : SampleSequence::Independent,
-            result.layers, progress);
+        const ShadingPassOutput out =
+            shade_pixels(ray_scene_, gb.gbuffer, frame, config_.frame, config_.spp(),
+                         config_.shading, config_.sequence(), result.layers, progress);
         stages["shading"] = ms_since(t0);
         rays += out.rays;
         guarded = out.nonfinite;

@@ -39,6 +39,8 @@ struct RenderConfig {
     SparseSettings sparse;
     CacheSettings cache;
     int spp() const;  // the sample count of the chosen method (0 for gbuffer)
+    // The samples of the chosen method's estimates (mis / reference / radiance points).
+    SampleSequence sequence() const;
     // Methods with state across frames (method A's cache) must render frames in order.
     bool needs_previous_frames() const { return method == RenderMethod::Cache; }
     // All settings of this render under their "prefix.key" names (for --set, JSON, stats).

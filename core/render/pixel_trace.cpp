@@ -45,11 +45,7 @@ std::vector<std::string> FrameRenderer::trace_pixel(const FrameResult& r, int x,
         line("no hit: background radiance");
         return out;
     }
-    DirectLighting lighting(
-        rs, config.shading,
-        (config.method == RenderMethod::Mis ? config.mis.stratified : config.reference.stratified)
-            ? SampleSequence::ScrambledSobol
-            : SampleSequence::Independent);
+    DirectLighting lighting(rs, config.shading, config.sequence());
     const ShadingPoint sp = lighting.shading_point(hit, -ray.direction);
     line("hit object %d \"%s\" t = %.5f, material \"%s\" (%s), uv = (%.4f, %.4f)", hit.object,
          rs.scene().objects[size_t(hit.object)].name.c_str(), hit.distance,

@@ -75,8 +75,7 @@ RadiancePointIntegrator::RadiancePointIntegrator(const RayScene& scene,
                                                  const PointsSettings& settings,
                                                  const EnvBandwidthHierarchy* bandwidth)
     : scene_(scene),
-      lighting_(scene, shading,
-                settings.stratified ? SampleSequence::ScrambledSobol : SampleSequence::Independent),
+      lighting_(scene, shading, sample_sequence(settings.stratified)),
       settings_(settings),
       bandwidth_(bandwidth) {
     const double radius = 0.5 * glm::length(glm::dvec3(scene.bounds_max() - scene.bounds_min()));
