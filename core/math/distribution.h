@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "base/huge_pages.h"
 #include "math/types.h"
 
 namespace freqlab {
@@ -58,17 +59,17 @@ class Distribution2D {
         float keep;      // probability of keeping texel i
         uint32_t alias;  // the texel taken otherwise
     };
-    std::vector<float> pdf_;         // density over [0,1)^2 of each texel
-    std::vector<AliasEntry> alias_;  // packed: one cache line per draw, not two
+    std::vector<float> pdf_;            // density over [0,1)^2 of each texel
+    HugePageVector<AliasEntry> alias_;  // packed: one cache line per draw, not two
     // Double precision so that a dim texel keeps its own mass (a float sum of a 2048-texel row
     // rounds masses below ~1e-7 of the row away).
-    std::vector<double> row_cdf_;     // height + 1 entries, 0 ... 1
-    std::vector<double> column_cdf_;  // per row width + 1 entries, 0 ... 1 (rows with mass)
+    std::vector<double> row_cdf_;        // height + 1 entries, 0 ... 1
+    HugePageVector<double> column_cdf_;  // per row width + 1 entries, 0 ... 1 (rows with mass)
     // Guide tables (Chen and Asau's cutpoints): entry g is the step holding u = g / steps, so an
     // inversion reads one entry and walks a step or two from there instead of binary-searching
     // a row (profiled: the search's cache misses were a third of a stratified points frame).
-    std::vector<uint32_t> row_guide_;     // height entries
-    std::vector<uint16_t> column_guide_;  // per row width entries (maps up to 65535 wide)
+    std::vector<uint32_t> row_guide_;        // height entries
+    HugePageVector<uint16_t> column_guide_;  // per row width entries (maps up to 65535 wide)
 };
 
 }  // namespace freqlab

@@ -14,8 +14,8 @@ namespace freqlab {
 inline float fast_atan2(float y, float x) {
     const float ax = std::fabs(x), ay = std::fabs(y);
     const float hi = std::max(ax, ay), lo = std::min(ax, ay);
-    if (!(hi > 0.0f)) return 0.0f;
-    const float a = lo / hi, s = a * a;
+    // Straight-line code (selects, no early return) so that loops calling it vectorize.
+    const float a = hi > 0.0f ? lo / std::max(hi, 1e-38f) : 0.0f, s = a * a;
     float r = -0.004054550247309302f;
     r = r * s + 0.021862903755919413f;
     r = r * s - 0.05591226182732162f;
@@ -25,8 +25,8 @@ inline float fast_atan2(float y, float x) {
     r = r * s - 0.3332986081863995f;
     r = r * s + 0.9999993356019522f;
     r *= a;
-    if (ay > ax) r = 1.57079632679489662f - r;
-    if (x < 0.0f) r = 3.14159265358979324f - r;
+    r = ay > ax ? 1.57079632679489662f - r : r;
+    r = x < 0.0f ? 3.14159265358979324f - r : r;
     return y < 0.0f ? -r : r;
 }
 

@@ -56,11 +56,12 @@ inline float power_cosine_pdf(float e, float cos_a) {
 }
 
 // Veach's power heuristic (beta = 2) for strategy f with nf samples against g with ng.
+// Straight-line code so that the integrator's sample loops vectorize; 0 when f <= 0 (or NaN),
+// 1 when f^2 overflows.
 inline float power_heuristic(float nf, float pdf_f, float ng, float pdf_g) {
-    const float f = nf * pdf_f, g = ng * pdf_g;
-    if (f <= 0.0f) return 0.0f;
-    if (!std::isfinite(f * f)) return 1.0f;
-    return (f * f) / (f * f + g * g);
+    const float f = nf * pdf_f, g = ng * pdf_g, f2 = f * f;
+    const float w = f2 / (f2 + g * g);
+    return f > 0.0f ? (f2 <= 3.40282347e38f ? w : 1.0f) : 0.0f;
 }
 
 }  // namespace freqlab

@@ -4,10 +4,44 @@
 #include <vector>
 
 #include "math/sobol.h"
+#include "scene/brdf_batch.h"
 
 namespace freqlab {
 
 namespace {
+
+// One strategy's samples as structure of arrays: the operands of the vectorized loops.
+struct SampleArrays {
+    std::vector<float> u1, u2;          // BRDF strategy: its uniforms
+    std::vector<float> x, y, z;         // world direction
+    std::vector<float> pdf, other_pdf;  // this strategy's density, the other one's
+    std::vector<float> value;           // f / albedo
+    std::vector<float> weight, factor;  // MIS weight; f/albedo x cos x w / pdf (0: no ray)
+    std::vector<vec3> radiance;         // of the environment along the direction
+    std::vector<int> texel;
+    std::vector<float> sin_theta;  // of the direction (for the lat-long density)
+    void resize(int n) {
+        const size_t m = size_t(n);
+        if (x.size() >= m) return;
+        for (std::vector<float>* v :
+             {&u1, &u2, &x, &y, &z, &pdf, &other_pdf, &value, &weight, &factor, &sin_theta})
+            v->resize(m);
+        radiance.resize(m);
+        texel.resize(m);
+    }
+    vec3 direction(int i) const { return vec3(x[size_t(i)], y[size_t(i)], z[size_t(i)]); }
+    // Cosine at the shading normal, power-heuristic weight and the sample's scalar factor.
+    void weigh(int n, const vec3& ns, float n_self, float n_other) {
+        for (int i = 0; i < n; ++i) {
+            const float cos_i = x[size_t(i)] * ns.x + y[size_t(i)] * ns.y + z[size_t(i)] * ns.z;
+            const float p = pdf[size_t(i)];
+            const float w = power_heuristic(n_self, p, n_other, other_pdf[size_t(i)]);
+            weight[size_t(i)] = w;
+            const float f = value[size_t(i)] * cos_i * w / p;
+            factor[size_t(i)] = p > 0.0f && cos_i > 0.0f ? f : 0.0f;
+        }
+    }
+};
 
 // Per-thread scratch so that shading a pixel allocates nothing after warm-up.
 struct Scratch {
@@ -23,9 +57,7 @@ struct Scratch {
     std::vector<vec2> light_u;
     std::vector<int> env_texel;
     std::vector<Distribution2D::Inversion> inversions;  // stratified environment samples
-    std::vector<BrdfSample> brdf_samples;
-    std::vector<int> brdf_texel;
-    std::vector<vec2> brdf_uv;
+    SampleArrays env, brdf;
 };
 
 Scratch& scratch() {
@@ -99,7 +131,9 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
                                           std::vector<CastSample>* cast) const {
     RadianceEstimate result;
     const Brdf brdf(*sp.material, sp.albedo, sp.shading_normal);
-    const int n_env = (spp + 1) / 2;
+    const BrdfBatch lobe(brdf, sp.wo);
+    const int n_env = environment_ ? (spp + 1) / 2 : 0;
+    const int n_units = (spp + 1) / 2;  // environment sample units (lights take one each too)
     const int n_brdf = environment_ ? spp / 2 : 0;  // BRDF rays only ever find the environment
     const vec3 origin = offset_origin(sp.position, sp.geometric_normal);
     const vec3& ng = sp.geometric_normal;
@@ -109,6 +143,8 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
     s.rays.clear();
     s.contributions.clear();
     s.unit.clear();
+    s.env.resize(n_env);
+    s.brdf.resize(n_brdf);
     const size_t traced_before = traced_ ? traced_->size() : 0;
     auto candidate = [&](const vec3& dir, float tfar, const vec3& value, int unit, float pdf = 0,
                          float other_pdf = 0, float w = 1) {
@@ -147,7 +183,7 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
             s.env_u.emplace_back(0.0f, 0.0f, inv.within);
         }
     }
-    for (int i = 0; i < n_env; ++i) {
+    for (int i = 0; i < n_units; ++i) {
         if (environment_ && !sobol) {
             const vec4 u(rng.next_float(), rng.next_float(), rng.next_float(), rng.next_float());
             s.env_u.push_back(u);
@@ -159,28 +195,61 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
                 s.light_u.emplace_back(u1, u2);
             }
     }
-    if (!sobol) {
+    // The BRDF samples next: their directions and texels are computed while the alias
+    // entries load, and their texels load while the environment samples are computed.
+    SampleArrays& b = s.brdf;
+    for (int j = 0; j < n_brdf; ++j) {
+        vec2 u;
+        if (sobol) {
+            u = brdf_points.at(uint32_t(j));
+        } else {
+            u.x = rng.next_float();
+            u.y = rng.next_float();
+        }
+        b.u1[size_t(j)] = u.x;
+        b.u2[size_t(j)] = u.y;
+    }
+    if (n_brdf > 0) {
+        lobe.sample(n_brdf, b.u1.data(), b.u2.data(), b.x.data(), b.y.data(), b.z.data(),
+                    b.value.data(), b.pdf.data());
+        environment_->lookup_texels(n_brdf, b.x.data(), b.y.data(), b.z.data(), b.texel.data(),
+                                    b.sin_theta.data());
+    }
+    if (environment_ && !sobol) {
         s.env_texel.resize(s.env_u.size());
         for (size_t i = 0; i < s.env_u.size(); ++i) {
             s.env_texel[i] = environment_->sample_texel(s.env_u[i]);
             environment_->prefetch_texel(s.env_texel[i]);
         }
     }
+    SampleArrays& e = s.env;
+    if (n_env > 0) {
+        environment_->sample_directions(n_env, s.env_texel.data(), s.env_u.data(), e.x.data(),
+                                        e.y.data(), e.z.data(), e.sin_theta.data());
+        lobe.eval(n_env, e.x.data(), e.y.data(), e.z.data(), e.value.data(), e.other_pdf.data());
+    }
+    // Now the texels' radiance and densities, then each sample's MIS weight and its scalar
+    // factor f/albedo x cos x w / pdf (0: no ray).
+    if (n_brdf > 0) {
+        environment_->texel_values(n_brdf, b.texel.data(), b.sin_theta.data(), b.other_pdf.data(),
+                                   b.radiance.data());
+        b.weigh(n_brdf, ns, float(n_brdf), float(n_env));
+    }
+    if (n_env > 0) {
+        environment_->texel_values(n_env, s.env_texel.data(), e.sin_theta.data(), e.pdf.data(),
+                                   e.radiance.data());
+        e.weigh(n_env, ns, float(n_env), float(n_brdf));
+    }
+
+    // The shadow rays, in the order of the units: environment sample i, the lights' unit i,
+    // then the BRDF samples.
+    const vec3& albedo = brdf.albedo();
     size_t next_light_u = 0;
-    for (int i = 0; i < n_env; ++i) {
-        if (environment_) {
-            vec3 dir;
-            float pdf_env;
-            const vec4& u = s.env_u[size_t(i)];
-            const vec3 le = environment_->sample_at(s.env_texel[size_t(i)], u, &dir, &pdf_env);
-            const float cos_i = glm::dot(dir, ns);
-            if (pdf_env > 0.0f && cos_i > 0.0f) {
-                const float pdf_brdf = brdf.pdf(sp.wo, dir);
-                const float w = power_heuristic(float(n_env), pdf_env, float(n_brdf), pdf_brdf);
-                candidate(dir, INFINITY, le * brdf.eval(sp.wo, dir) * (cos_i * w / pdf_env), i,
-                          pdf_env, pdf_brdf, w);
-            }
-        }
+    for (int i = 0; i < n_units; ++i) {
+        if (i < n_env && e.factor[size_t(i)] > 0.0f)
+            candidate(e.direction(i), INFINITY,
+                      e.radiance[size_t(i)] * albedo * e.factor[size_t(i)], i, e.pdf[size_t(i)],
+                      e.other_pdf[size_t(i)], e.weight[size_t(i)]);
         for (const Light* l : lights_) {
             vec3 dir, value;
             float dist = INFINITY;
@@ -211,34 +280,11 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
             candidate(dir, tfar, value * brdf.eval(sp.wo, dir) * cos_i, i);
         }
     }
-    s.brdf_samples.clear();
-    s.brdf_texel.resize(size_t(n_brdf));
-    s.brdf_uv.resize(size_t(n_brdf));
-    for (int j = 0; j < n_brdf; ++j) {
-        vec2 u;
-        if (sobol) {
-            u = brdf_points.at(uint32_t(j));
-        } else {
-            u.x = rng.next_float();
-            u.y = rng.next_float();
-        }
-        s.brdf_samples.push_back(brdf.sample(sp.wo, u.x, u.y));
-        const BrdfSample& bs = s.brdf_samples.back();
-        if (bs.pdf <= 0.0f || glm::dot(bs.wi, ns) <= 0.0f) continue;
-        s.brdf_texel[size_t(j)] = environment_->texel_of(bs.wi, &s.brdf_uv[size_t(j)]);
-        environment_->prefetch_texel(s.brdf_texel[size_t(j)]);
-    }
-    for (int j = 0; j < n_brdf; ++j) {
-        const BrdfSample& bs = s.brdf_samples[size_t(j)];
-        const float cos_i = glm::dot(bs.wi, ns);
-        if (bs.pdf <= 0.0f || cos_i <= 0.0f) continue;
-        float pdf_env;
-        const vec3 le =
-            environment_->eval_with_pdf_at(s.brdf_texel[size_t(j)], s.brdf_uv[size_t(j)], &pdf_env);
-        const float w = power_heuristic(float(n_brdf), bs.pdf, float(n_env), pdf_env);
-        candidate(bs.wi, INFINITY, le * bs.f * (cos_i * w / bs.pdf), -(j + 1), bs.pdf, pdf_env, w);
-    }
-
+    for (int j = 0; j < n_brdf; ++j)
+        if (b.factor[size_t(j)] > 0.0f)
+            candidate(b.direction(j), INFINITY,
+                      b.radiance[size_t(j)] * albedo * b.factor[size_t(j)], -(j + 1),
+                      b.pdf[size_t(j)], b.other_pdf[size_t(j)], b.weight[size_t(j)]);
     const size_t n_rays = s.rays.size();
     if (s.occluded_size < n_rays) {
         s.occluded.reset(new bool[n_rays]);
@@ -254,7 +300,7 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
         for (size_t k = 0; k < n_rays; ++k) (*traced_)[traced_before + k].occluded = s.occluded[k];
     result.rays = long(n_rays);
 
-    s.env_units.assign(size_t(n_env), vec3(0.0f));
+    s.env_units.assign(size_t(n_units), vec3(0.0f));
     s.brdf_units.assign(size_t(n_brdf), vec3(0.0f));
     for (size_t k = 0; k < n_rays; ++k) {
         if (s.occluded[k]) continue;
@@ -267,9 +313,10 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
     vec3 sum_env(0.0f), sum_brdf(0.0f);
     for (const vec3& v : s.env_units) sum_env += v;
     for (const vec3& v : s.brdf_units) sum_brdf += v;
-    result.radiance = (n_env ? sum_env / float(n_env) : vec3(0.0f)) +
+    result.radiance = (n_units ? sum_env / float(n_units) : vec3(0.0f)) +
                       (n_brdf ? sum_brdf / float(n_brdf) : vec3(0.0f));
-    result.variance = variance_of_mean(s.env_units, n_env) + variance_of_mean(s.brdf_units, n_brdf);
+    result.variance =
+        variance_of_mean(s.env_units, n_units) + variance_of_mean(s.brdf_units, n_brdf);
     return result;
 }
 

@@ -36,6 +36,9 @@ class Brdf {
     bool is_delta() const { return type_ == BrdfType::Mirror; }
     const Frame& frame() const { return frame_; }
     const vec3& albedo() const { return albedo_; }
+    BrdfType type() const { return type_; }
+    float phong_exponent() const { return exponent_; }
+    float roughness() const { return alpha_; }
 
     vec3 eval(const vec3& wo, const vec3& wi) const;  // world directions, both pointing away
     float pdf(const vec3& wo, const vec3& wi) const;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "math/fast_atan2.h"
+#include "math/fast_math.h"
 
 namespace freqlab {
 
@@ -97,6 +98,58 @@ vec3 EnvironmentMap::uv_to_direction(vec2 uv) const {
     const float phi = kTwoPi * uv.x + glm::radians(rotation_deg_), theta = kPi * uv.y;
     const float st = std::sin(theta);
     return vec3(st * std::cos(phi), st * std::sin(phi), std::cos(theta));
+}
+
+void EnvironmentMap::sample_directions(int n, const int* texel, const vec4* u, float* x, float* y,
+                                       float* z, float* sin_theta) const {
+    const int w = image_->width, h = image_->height;
+    const double inv_w = 1.0 / w;
+    const float inv_wf = 1.0f / float(w), inv_hf = 1.0f / float(h);
+    const float rotation = glm::radians(rotation_deg_);
+    for (int i = 0; i < n; ++i) {
+        // Row and column in double: exact for any map, and vectorizable (an int division is not).
+        const int row = int((double(texel[i]) + 0.5) * inv_w), column = texel[i] - row * w;
+        const float uv_x = std::min((float(column) + u[i].z) * inv_wf, 0x1.fffffep-1f);
+        const float uv_y = std::min((float(row) + u[i].w) * inv_hf, 0x1.fffffep-1f);
+        float st, ct, sp, cp;
+        fast_sincos(kPi * uv_y, &st, &ct);
+        fast_sincos(kTwoPi * uv_x + rotation, &sp, &cp);
+        x[i] = st * cp;
+        y[i] = st * sp;
+        z[i] = ct;
+        sin_theta[i] = st;
+    }
+}
+
+void EnvironmentMap::lookup_texels(int n, const float* x, const float* y, const float* z,
+                                   int* texel, float* sin_theta) const {
+    const int w = image_->width, h = image_->height;
+    const float rotation = glm::radians(rotation_deg_);
+    for (int i = 0; i < n; ++i) {  // direction_to_uv() and texel_index(), branch-free
+        const float rxy = std::sqrt(x[i] * x[i] + y[i] * y[i]);
+        const float theta = fast_atan2(rxy, z[i]);
+        float phi = fast_atan2(y[i], x[i]) - rotation;
+        const float turns = phi / kTwoPi;
+        float whole = float(int(turns));
+        whole = whole > turns ? whole - 1.0f : whole;  // floor
+        phi -= kTwoPi * whole;
+        const int column = std::min(int(phi / kTwoPi * float(w)), w - 1);
+        const int row = std::min(int(theta / kPi * float(h)), h - 1);
+        texel[i] = row * w + column;
+        sin_theta[i] = rxy;  // = sin(pi v) of the lat-long map, without the sine
+    }
+    for (int i = 0; i < n; ++i) prefetch_texel(texel[i]);
+}
+
+void EnvironmentMap::texel_values(int n, const int* texel, const float* sin_theta, float* pdf,
+                                  vec3* radiance) const {
+    for (int i = 0; i < n; ++i) {
+        const Texel& t = texels_[size_t(texel[i])];
+        radiance[i] = t.radiance;
+        pdf[i] = t.pdf_uv;
+    }
+    for (int i = 0; i < n; ++i)
+        pdf[i] = sin_theta[i] > 0.0f ? pdf[i] / (2.0f * kPi * kPi * sin_theta[i]) : 0.0f;
 }
 
 vec3 EnvironmentMap::sample(const vec4& u, vec3* direction, float* pdf) const {

@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "base/huge_pages.h"
 #include "image/image_io.h"
 #include "math/distribution.h"
 #include "math/types.h"
@@ -55,6 +56,20 @@ class EnvironmentMap {
     // == eval_with_pdf(d).
     int texel_of(const vec3& direction, vec2* uv) const;
     vec3 eval_with_pdf_at(int texel, vec2 uv, float* pdf) const;
+    // Both for n samples at once, in loops the compiler vectorizes (math/fast_math.h instead of
+    // libm), split where the memory is read so that a caller can compute between starting the
+    // reads and using them (the texels' cache misses were most of the integrator's time):
+    // - sample_directions(): sample_at()'s directions for the chosen texels and in-texel
+    //   positions (u.z, u.w) of `u`, and their sin(theta); reads no texel;
+    // - lookup_texels(): the texels holding n directions and their sin(theta); prefetches them;
+    // - texel_values(): radiance and solid-angle pdf of n samples from texels and sin(theta).
+    // Directions are structure of arrays.
+    void sample_directions(int n, const int* texel, const vec4* u, float* x, float* y, float* z,
+                           float* sin_theta) const;
+    void lookup_texels(int n, const float* x, const float* y, const float* z, int* texel,
+                       float* sin_theta) const;
+    void texel_values(int n, const int* texel, const float* sin_theta, float* pdf,
+                      vec3* radiance) const;
 
     const std::string& source() const { return source_; }
     const RgbImage& image() const { return *image_; }
@@ -77,7 +92,7 @@ class EnvironmentMap {
         vec3 radiance;  // clamped and scaled
         float pdf_uv;   // sampling density over [0,1)^2: read with the radiance, one miss
     };
-    std::vector<Texel> texels_;
+    HugePageVector<Texel> texels_;  // read at random by every sample
     float rotation_deg_, scale_, spin_deg_per_s_ = 0.0f;
     Distribution2D distribution_;
 };
