@@ -192,7 +192,9 @@ TEST(Bake, AtlasTexelsLieOnTheirTrianglesAndInsideTexelsAreFlagged) {
             ++inside;
             inside_ok += t.state == TexelState::InsideGeometry;
         }
-        if (clear) EXPECT_EQ(t.state, TexelState::Valid) << t.position.x << "," << t.position.y;
+        if (clear) {
+            EXPECT_EQ(t.state, TexelState::Valid) << t.position.x << "," << t.position.y;
+        }
     }
     EXPECT_GT(inside, 50);
     EXPECT_EQ(inside_ok, inside);

@@ -109,7 +109,9 @@ TEST(Colormap, TicksAreNiceAndInsideTheRange) {
     for (size_t i = 0; i < t.size(); ++i) {
         EXPECT_GE(t[i], -3.7);
         EXPECT_LE(t[i], 12.2);
-        if (i) EXPECT_NEAR(t[i] - t[i - 1], 5.0, 1e-12);  // 1-2-5 steps: 5 here
+        if (i) {
+            EXPECT_NEAR(t[i] - t[i - 1], 5.0, 1e-12);  // 1-2-5 steps: 5 here
+        }
     }
     EXPECT_EQ(colorbar_ticks(2.0, 2.0), (std::vector<double>{2.0, 2.0}));  // degenerate range
 }

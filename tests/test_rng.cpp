@@ -43,3 +43,14 @@ TEST(Rng, FloatsStayBelowOne) {
         ASSERT_LT(f, 1.0f);
     }
 }
+
+TEST(Rng, FillFloatsIsTheSameStreamAsNextFloat) {
+    CounterRng a(3, 1, 4, 1), b(3, 1, 4, 1);
+    for (int n : {1, 7, 32, 3}) {
+        std::vector<float> block(size_t(n), -1.0f);
+        a.fill_floats(block.data(), n);
+        for (int i = 0; i < n; ++i) ASSERT_EQ(block[size_t(i)], b.next_float()) << n << " " << i;
+        ASSERT_EQ(a.counter(), b.counter());
+    }
+    EXPECT_EQ(a.next_float(), b.next_float());
+}

@@ -239,7 +239,9 @@ TEST(Sampling, EnvironmentPdfIntegratesToOneAndCoversTheRadiance) {
     CounterRng rng(8, 0, 0, 0);
     for (int i = 0; i < 200000; ++i) {
         const vec3 d = sample_uniform_sphere(rng.next_float(), rng.next_float());
-        if (luminance(env.eval(d)) > 0.0f) ASSERT_GT(env.pdf(d), 0.0f);
+        if (luminance(env.eval(d)) > 0.0f) {
+            ASSERT_GT(env.pdf(d), 0.0f);
+        }
     }
 }
 

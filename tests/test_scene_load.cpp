@@ -21,7 +21,9 @@ TEST(SceneLoad, EveryFileInScenesLoads) {
         EXPECT_GE(s.frame_count, 1);
         for (const SceneObject& o : s.objects) {
             ASSERT_LT(o.material, int(s.materials.size()));
-            if (o.shape == ShapeKind::Mesh) EXPECT_GT(o.mesh->triangles.size(), 0u);
+            if (o.shape == ShapeKind::Mesh) {
+                EXPECT_GT(o.mesh->triangles.size(), 0u);
+            }
         }
         ++count;
     }

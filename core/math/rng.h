@@ -28,6 +28,15 @@ class CounterRng {
         const uint64_t hi = next_u32(), lo = next_u32();
         return double(((hi << 32) | lo) >> 11) * 0x1p-53;
     }
+    // next_float() n times, in a loop the compiler vectorizes (the draws are independent).
+    void fill_floats(float* out, int n) {
+        const uint64_t base = counter_;
+        for (int i = 0; i < n; ++i) {
+            const uint64_t k = key_ + 0x9e3779b97f4a7c15ULL * (base + uint64_t(i) + 1);
+            out[i] = float(uint32_t(mix64(k) >> 32) >> 8) * 0x1p-24f;
+        }
+        counter_ += uint64_t(n);
+    }
     uint64_t counter() const { return counter_; }
 
   private:

@@ -32,13 +32,16 @@ struct SampleArrays {
     vec3 direction(int i) const { return vec3(x[size_t(i)], y[size_t(i)], z[size_t(i)]); }
     // Cosine at the shading normal, power-heuristic weight and the sample's scalar factor.
     void weigh(int n, const vec3& ns, float n_self, float n_other) {
+        const float* __restrict xs = x.data(), * __restrict ys = y.data(), * __restrict zs = z.data();
+        const float* __restrict ps = pdf.data(), * __restrict qs = other_pdf.data();
+        const float* __restrict vs = value.data();
+        float* __restrict ws = weight.data(), * __restrict fs = factor.data();
         for (int i = 0; i < n; ++i) {
-            const float cos_i = x[size_t(i)] * ns.x + y[size_t(i)] * ns.y + z[size_t(i)] * ns.z;
-            const float p = pdf[size_t(i)];
-            const float w = power_heuristic(n_self, p, n_other, other_pdf[size_t(i)]);
-            weight[size_t(i)] = w;
-            const float f = value[size_t(i)] * cos_i * w / p;
-            factor[size_t(i)] = p > 0.0f && cos_i > 0.0f ? f : 0.0f;
+            const float cos_i = xs[i] * ns.x + ys[i] * ns.y + zs[i] * ns.z;
+            const float w = power_heuristic(n_self, ps[i], n_other, qs[i]);
+            ws[i] = w;
+            const float f = vs[i] * cos_i * w / ps[i];
+            fs[i] = ps[i] > 0.0f && cos_i > 0.0f ? f : 0.0f;
         }
     }
 };
@@ -58,6 +61,7 @@ struct Scratch {
     std::vector<int> env_texel;
     std::vector<Distribution2D::Inversion> inversions;  // stratified environment samples
     SampleArrays env, brdf;
+    std::vector<float> uniforms;  // a block of the pixel's stream
 };
 
 Scratch& scratch() {
@@ -70,14 +74,17 @@ float max_abs_component(const vec3& p) {
 }
 
 // Sample variance of the luminance of `units`, divided by their count (variance of the mean).
+// Two passes (mean, then squared deviations): no division in the loop (Welford's running
+// mean divided per unit, a chain of divisions profiled at 3.5 % of a 16-spp pixel).
 float variance_of_mean(const std::vector<vec3>& units, int n) {
     if (n < 2) return 0.0f;
-    double mean = 0, m2 = 0;
+    double sum = 0;
+    for (int i = 0; i < n; ++i) sum += luminance(units[size_t(i)]);
+    const double mean = sum / n;
+    double m2 = 0;
     for (int i = 0; i < n; ++i) {
-        const double x = luminance(units[size_t(i)]);
-        const double d = x - mean;
-        mean += d / (i + 1);
-        m2 += d * (x - mean);
+        const double d = luminance(units[size_t(i)]) - mean;
+        m2 += d * d;
     }
     return float(m2 / (n - 1) / n);
 }
@@ -89,6 +96,7 @@ DirectLighting::DirectLighting(const RayScene& scene, const ShadingSettings& set
     : scene_(scene), environment_(scene.environment()), settings_(settings), sequence_(sequence) {
     for (const Light& l : scene.scene().lights)
         if (!l.environment) lights_.push_back(&l);
+    for (const Light* l : lights_) quad_lights_ = quad_lights_ || l->type == LightType::Quad;
 }
 
 vec3 DirectLighting::offset_origin(const vec3& p, const vec3& n) const {
@@ -140,18 +148,24 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
     const vec3& ns = sp.shading_normal;
 
     Scratch& s = scratch();
-    s.rays.clear();
-    s.contributions.clear();
-    s.unit.clear();
     s.env.resize(n_env);
     s.brdf.resize(n_brdf);
+    // The rays are written in place (at most one per sample and light unit).
+    const size_t max_rays = size_t(n_env + n_brdf) + size_t(n_units) * lights_.size();
+    if (s.rays.size() < max_rays) {
+        s.rays.resize(max_rays);
+        s.contributions.resize(max_rays);
+        s.unit.resize(max_rays);
+    }
+    size_t n_rays = 0;
     const size_t traced_before = traced_ ? traced_->size() : 0;
     auto candidate = [&](const vec3& dir, float tfar, const vec3& value, int unit, float pdf = 0,
                          float other_pdf = 0, float w = 1) {
         if (!(luminance(value) > 0.0f) || glm::dot(dir, ng) <= 0.0f) return;
-        s.rays.push_back(Ray{origin, dir, 0.0f, tfar});
-        s.contributions.push_back(value);
-        s.unit.push_back(unit);
+        s.rays[n_rays] = Ray{origin, dir, 0.0f, tfar};
+        s.contributions[n_rays] = value;
+        s.unit[n_rays] = unit;
+        ++n_rays;
         if (traced_)
             traced_->push_back(SampleTrace{unit >= 0, unit >= 0 ? unit : -unit - 1, dir, pdf,
                                            other_pdf, w, value, false});
@@ -183,31 +197,46 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
             s.env_u.emplace_back(0.0f, 0.0f, inv.within);
         }
     }
-    for (int i = 0; i < n_units; ++i) {
-        if (environment_ && !sobol) {
-            const vec4 u(rng.next_float(), rng.next_float(), rng.next_float(), rng.next_float());
-            s.env_u.push_back(u);
-            environment_->prefetch_alias(u);
+    if (environment_ && !sobol && !quad_lights_) {
+        // Without quad lights the environment's uniforms are one block of the stream: drawn in
+        // one vectorized call, in the same order as the loop below.
+        s.uniforms.resize(size_t(4 * n_env));
+        rng.fill_floats(s.uniforms.data(), 4 * n_env);
+        for (int i = 0; i < n_env; ++i) {
+            const float* f = &s.uniforms[size_t(4 * i)];
+            s.env_u.emplace_back(f[0], f[1], f[2], f[3]);
+            environment_->prefetch_alias(s.env_u.back());
         }
-        for (const Light* l : lights_)
-            if (l->type == LightType::Quad) {
-                const float u1 = rng.next_float(), u2 = rng.next_float();
-                s.light_u.emplace_back(u1, u2);
+    } else
+        for (int i = 0; i < n_units; ++i) {
+            if (environment_ && !sobol) {
+                const vec4 u(rng.next_float(), rng.next_float(), rng.next_float(),
+                             rng.next_float());
+                s.env_u.push_back(u);
+                environment_->prefetch_alias(u);
             }
-    }
+            for (const Light* l : lights_)
+                if (l->type == LightType::Quad) {
+                    const float u1 = rng.next_float(), u2 = rng.next_float();
+                    s.light_u.emplace_back(u1, u2);
+                }
+        }
     // The BRDF samples next: their directions and texels are computed while the alias
     // entries load, and their texels load while the environment samples are computed.
     SampleArrays& b = s.brdf;
-    for (int j = 0; j < n_brdf; ++j) {
-        vec2 u;
-        if (sobol) {
-            u = brdf_points.at(uint32_t(j));
-        } else {
-            u.x = rng.next_float();
-            u.y = rng.next_float();
+    if (sobol) {
+        for (int j = 0; j < n_brdf; ++j) {
+            const vec2 u = brdf_points.at(uint32_t(j));
+            b.u1[size_t(j)] = u.x;
+            b.u2[size_t(j)] = u.y;
         }
-        b.u1[size_t(j)] = u.x;
-        b.u2[size_t(j)] = u.y;
+    } else {
+        s.uniforms.resize(size_t(2 * n_brdf));
+        rng.fill_floats(s.uniforms.data(), 2 * n_brdf);
+        for (int j = 0; j < n_brdf; ++j) {
+            b.u1[size_t(j)] = s.uniforms[size_t(2 * j)];
+            b.u2[size_t(j)] = s.uniforms[size_t(2 * j + 1)];
+        }
     }
     if (n_brdf > 0) {
         lobe.sample(n_brdf, b.u1.data(), b.u2.data(), b.x.data(), b.y.data(), b.z.data(),
@@ -285,13 +314,12 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
             candidate(b.direction(j), INFINITY,
                       b.radiance[size_t(j)] * albedo * b.factor[size_t(j)], -(j + 1),
                       b.pdf[size_t(j)], b.other_pdf[size_t(j)], b.weight[size_t(j)]);
-    const size_t n_rays = s.rays.size();
     if (s.occluded_size < n_rays) {
         s.occluded.reset(new bool[n_rays]);
         s.occluded_size = n_rays;
     }
     scene_.occluded_stream(s.rays.data(), int(n_rays), s.occluded.get());
-    if (recorded_) recorded_->insert(recorded_->end(), s.rays.begin(), s.rays.end());
+    if (recorded_) recorded_->insert(recorded_->end(), s.rays.begin(), s.rays.begin() + n_rays);
     if (cast)
         for (size_t k = 0; k < n_rays; ++k)
             cast->push_back(CastSample{s.rays[k], s.occluded[k], s.unit[k] < 0,

@@ -98,6 +98,7 @@ class DirectLighting {
     const RayScene& scene_;
     const EnvironmentMap* environment_;
     std::vector<const Light*> lights_;  // point, directional, quad
+    bool quad_lights_ = false;          // (they draw uniforms between environment samples)
     ShadingSettings settings_;
     SampleSequence sequence_;
     std::vector<Ray>* recorded_ = nullptr;

@@ -143,8 +143,10 @@ BrdfBatch::BrdfBatch(const Brdf& brdf, const vec3& wo_world) : frame_(brdf.frame
     l.alpha = brdf.roughness();
     l.alpha2 = l.alpha * l.alpha;
     l.valid = l.wo.z > 0.0f && l.type != BrdfType::Mirror;
-    l.g1_wo = l.type == BrdfType::Ggx ? ggx_g1(l.wo.z, l.alpha2) : beckmann_g1(l.wo.z, l.alpha);
-    l.phong_frame = Frame(vec3(-l.wo.x, -l.wo.y, l.wo.z));
+    // Only what the model reads (this runs once per shaded point).
+    if (l.type == BrdfType::Ggx) l.g1_wo = ggx_g1(l.wo.z, l.alpha2);
+    if (l.type == BrdfType::Beckmann) l.g1_wo = beckmann_g1(l.wo.z, l.alpha);
+    if (l.type == BrdfType::Phong) l.phong_frame = Frame(vec3(-l.wo.x, -l.wo.y, l.wo.z));
 }
 
 void BrdfBatch::eval(int n, const float* x, const float* y, const float* z, float* value,

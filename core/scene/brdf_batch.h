@@ -31,7 +31,7 @@ class BrdfBatch {
         vec3 wo;              // local, unit
         float exponent;       // Phong
         float alpha, alpha2;  // Beckmann / GGX
-        float g1_wo;          // Smith G1 of wo (microfacet models)
+        float g1_wo = 0;      // Smith G1 of wo (microfacet models)
         Frame phong_frame;    // about the mirror direction of wo (Phong sampling)
         bool valid;           // wo above the surface; else everything is 0
     };

@@ -2,12 +2,17 @@
 // occlusion loop over exactly the rays it casts (issue "Reference direct-lighting integrator",
 // acceptance 5: the integrator should reach >= 70 % of the bare loop).
 //
-//   ./build/tests/freqlab_benchmarks --benchmark_filter=ShadowRays
+//   ./build/tests/freqlab_benchmarks --benchmark_filter=ShadowRays \
+//       --benchmark_repetitions=9 --benchmark_enable_random_interleaving=true
+// (the argument is the spp; BENCH_SCENE=path.json runs another scene).
 #include <benchmark/benchmark.h>
 #include <embree3/rtcore.h>
 #include <tbb/parallel_for.h>
 
 #include <array>
+#include <cmath>
+#include <cstdlib>
+#include <map>
 #include <memory>
 
 #include "render/direct_lighting.h"
@@ -18,19 +23,23 @@ using namespace freqlab;
 
 namespace {
 
-constexpr int kWidth = 320, kHeight = 180, kSpp = 16;
-
+// Every spp shades the same number of samples: 320x180 pixels at 16 spp, 80x45 at 256.
 struct Fixture {
-    Scene scene = load_scene(FREQLAB_SOURCE_DIR "/scenes/rotor.json");
+    Scene scene = load_scene(std::getenv("BENCH_SCENE") ? std::getenv("BENCH_SCENE")
+                                                        : FREQLAB_SOURCE_DIR "/scenes/rotor.json");
     EmbreeDevice device{0};
     RayScene rays{scene, device};
+    int spp, width, height;
     GBuffer gbuffer;
     std::vector<Ray> recorded;  // the integrator's shadow rays, in the order it cast them
 
-    Fixture() {
+    explicit Fixture(int spp_)
+        : spp(spp_),
+          width(int(320 / std::sqrt(spp_ / 16.0))),
+          height(int(180 / std::sqrt(spp_ / 16.0))) {
         FrameSettings fs;
-        fs.width = kWidth;
-        fs.height = kHeight;
+        fs.width = width;
+        fs.height = height;
         GBufferSettings gs;
         gs.aa_samples = 1;
         Progress p;
@@ -40,30 +49,32 @@ struct Fixture {
         for (size_t i = 0; i < gbuffer.hits.size(); ++i) {
             CounterRng rng(0, 0, i, 0);
             if (gbuffer.hits[i].valid)
-                lighting.shade_hit(gbuffer.hits[i], -gbuffer.view_dirs[i], kSpp, rng);
+                lighting.shade_hit(gbuffer.hits[i], -gbuffer.view_dirs[i], spp, rng);
         }
     }
 };
 
-Fixture& fixture() {
-    static Fixture f;
-    return f;
+Fixture& fixture(int spp) {
+    static std::map<int, std::unique_ptr<Fixture>> fixtures;
+    std::unique_ptr<Fixture>& f = fixtures[spp];
+    if (!f) f = std::make_unique<Fixture>(spp);
+    return *f;
 }
 
 void BM_ShadowRays_Integrator(benchmark::State& state) {
-    Fixture& f = fixture();
+    Fixture& f = fixture(int(state.range(0)));
     const DirectLighting lighting(f.rays, ShadingSettings{});
     long rays = 0;
     for (auto _ : state) {
         std::atomic<long> count{0};
-        tbb::parallel_for(0, kHeight, [&](int y) {
+        tbb::parallel_for(0, f.height, [&](int y) {
             long local = 0;
-            for (int x = 0; x < kWidth; ++x) {
-                const size_t p = size_t(y) * kWidth + x;
+            for (int x = 0; x < f.width; ++x) {
+                const size_t p = size_t(y) * f.width + x;
                 CounterRng rng(0, 0, p, 0);
                 if (f.gbuffer.hits[p].valid)
                     local +=
-                        lighting.shade_hit(f.gbuffer.hits[p], -f.gbuffer.view_dirs[p], kSpp, rng)
+                        lighting.shade_hit(f.gbuffer.hits[p], -f.gbuffer.view_dirs[p], f.spp, rng)
                             .rays;
             }
             count += local;
@@ -75,7 +86,7 @@ void BM_ShadowRays_Integrator(benchmark::State& state) {
 }
 
 void BM_ShadowRays_BareEmbree(benchmark::State& state) {
-    Fixture& f = fixture();
+    Fixture& f = fixture(int(state.range(0)));
     // The same rays, pre-converted; the loop is nothing but rtcOccluded1M in chunks of 64.
     std::vector<RTCRay> rtc(f.recorded.size());
     for (size_t i = 0; i < f.recorded.size(); ++i) {
@@ -106,7 +117,7 @@ void BM_ShadowRays_BareEmbree(benchmark::State& state) {
 // The same rays as 8-wide packets in cast order (consecutive rays mostly share a shading
 // point, so a packet is coherent at its origin): what a packet-casting integrator could reach.
 void BM_ShadowRays_BareEmbreePackets8(benchmark::State& state) {
-    Fixture& f = fixture();
+    Fixture& f = fixture(int(state.range(0)));
     const int packets = int((f.recorded.size() + 7) / 8);
     std::vector<RTCRay8> rtc{size_t(packets)};
     std::vector<std::array<int, 8>> valid{size_t(packets)};
@@ -139,7 +150,19 @@ void BM_ShadowRays_BareEmbreePackets8(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK(BM_ShadowRays_Integrator)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_ShadowRays_BareEmbree)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_ShadowRays_BareEmbreePackets8)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ShadowRays_Integrator)
+    ->Arg(16)
+    ->Arg(256)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_ShadowRays_BareEmbree)
+    ->Arg(16)
+    ->Arg(256)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_ShadowRays_BareEmbreePackets8)
+    ->Arg(16)
+    ->Arg(256)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK_MAIN();
