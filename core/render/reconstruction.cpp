@@ -5,6 +5,8 @@
 #include <atomic>
 #include <cmath>
 
+#include "math/fast_math.h"
+
 namespace freqlab {
 
 double reconstruction_weight(const PixelFeature& fi, const PixelFeature& fj, float mu_i, float mu_j,
@@ -14,7 +16,7 @@ double reconstruction_weight(const PixelFeature& fi, const PixelFeature& fj, flo
     const float dp2 = glm::dot(d, d) / (footprint * footprint);
     const float dn2 = glm::dot(fi.normal - fj.normal, fi.normal - fj.normal);
     const float dm = mu_i - mu_j, ds = sigma_i - sigma_j;
-    return std::exp(-(dp2 / (2.0f * s.sigma_position * s.sigma_position) +
+    return fast_exp(-(dp2 / (2.0f * s.sigma_position * s.sigma_position) +
                       dn2 / (2.0f * s.sigma_normal * s.sigma_normal) +
                       dm * dm / (2.0f * s.sigma_mu_v * s.sigma_mu_v) +
                       ds * ds / (2.0f * s.sigma_sigma_v * s.sigma_sigma_v)));
