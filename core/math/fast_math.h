@@ -39,6 +39,14 @@ inline float round_nearest(float x) {
     constexpr float kMagic = 12582912.0f;
     return (x + kMagic) - kMagic;
 }
+// c0 + x (c1 + x (c2 + ...)), by Horner's rule; coefficients from the constant term up.
+inline float polynomial(float, float c0) {
+    return c0;
+}
+template <class... Rest>
+inline float polynomial(float x, float c0, float c1, Rest... rest) {
+    return c0 + x * polynomial(x, c1, rest...);
+}
 }  // namespace fast_math_detail
 
 inline void fast_sincos(float x, float* sin_out, float* cos_out) {
@@ -49,20 +57,12 @@ inline void fast_sincos(float x, float* sin_out, float* cos_out) {
     const float r =
         ((x - q * 1.5703125f) - q * 4.83751296997070312e-4f) - q * 7.54978995489188216e-8f;
     const float r2 = r * r;
-    float s = 1.0f / 6227020800.0f;  // 1/13!
-    s = s * r2 - 1.0f / 39916800.0f;
-    s = s * r2 + 1.0f / 362880.0f;
-    s = s * r2 - 1.0f / 5040.0f;
-    s = s * r2 + 1.0f / 120.0f;
-    s = s * r2 - 1.0f / 6.0f;
-    s = r + r * r2 * s;
-    float c = 1.0f / 479001600.0f;  // 1/12!
-    c = c * r2 - 1.0f / 3628800.0f;
-    c = c * r2 + 1.0f / 40320.0f;
-    c = c * r2 - 1.0f / 720.0f;
-    c = c * r2 + 1.0f / 24.0f;
-    c = c * r2 - 0.5f;
-    c = 1.0f + r2 * c;
+    // Taylor series to r^13 and r^12 (|r| <= pi/4).
+    const float s = r + r * r2 *
+                            polynomial(r2, -1.0f / 6.0f, 1.0f / 120.0f, -1.0f / 5040.0f,
+                                       1.0f / 362880.0f, -1.0f / 39916800.0f, 1.0f / 6227020800.0f);
+    const float c = 1.0f + r2 * polynomial(r2, -0.5f, 1.0f / 24.0f, -1.0f / 720.0f, 1.0f / 40320.0f,
+                                           -1.0f / 3628800.0f, 1.0f / 479001600.0f);
     const int quadrant = int(q) & 3;
     const bool swap = (quadrant & 1) != 0;
     const float sv = swap ? c : s, cv = swap ? s : c;
@@ -79,13 +79,9 @@ inline float fast_log2(float x) {
     m = fold ? 0.5f * m : m;
     e = fold ? e + 1.0f : e;
     const float t = (m - 1.0f) / (m + 1.0f), t2 = t * t;  // |t| <= 0.1716
-    float p = 2.0f / 13.0f;
-    p = p * t2 + 2.0f / 11.0f;
-    p = p * t2 + 2.0f / 9.0f;
-    p = p * t2 + 2.0f / 7.0f;
-    p = p * t2 + 2.0f / 5.0f;
-    p = p * t2 + 2.0f / 3.0f;
-    p = p * t2 + 2.0f;
+    // ln m = 2 atanh t = 2 (t + t^3/3 + t^5/5 + ...)
+    const float p = polynomial(t2, 2.0f, 2.0f / 3.0f, 2.0f / 5.0f, 2.0f / 7.0f, 2.0f / 9.0f,
+                               2.0f / 11.0f, 2.0f / 13.0f);
     return e + t * p * 1.44269504088896341f;  // ln m / ln 2
 }
 
@@ -94,15 +90,8 @@ inline float fast_exp2(float y) {
     const bool underflow = y < -126.0f;
     const float yc = y > 127.0f ? 127.0f : (underflow ? -126.0f : y);
     const float n = round_nearest(yc), f = (yc - n) * 0.693147180559945309f;  // |f| <= ln2/2
-    float p = 1.0f / 40320.0f;
-    p = p * f + 1.0f / 5040.0f;
-    p = p * f + 1.0f / 720.0f;
-    p = p * f + 1.0f / 120.0f;
-    p = p * f + 1.0f / 24.0f;
-    p = p * f + 1.0f / 6.0f;
-    p = p * f + 0.5f;
-    p = p * f + 1.0f;
-    p = p * f + 1.0f;
+    const float p = polynomial(f, 1.0f, 1.0f, 0.5f, 1.0f / 6.0f, 1.0f / 24.0f, 1.0f / 120.0f,
+                               1.0f / 720.0f, 1.0f / 5040.0f, 1.0f / 40320.0f);  // e^f
     const float scale = from_bits(uint32_t(int(n) + 127) << 23);
     return underflow ? 0.0f : p * scale;
 }
