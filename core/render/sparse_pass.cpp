@@ -279,8 +279,9 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
             });
         }
         keeper = resolve_pixels(records, cache->state.cache, view, cache->settings);
-        for (size_t i = 0; i < n; ++i) {
-            if (keeper[i] < 0 || fresh[i]) continue;
+        // Per pixel in parallel (each writes only its own pixel), then the list in pixel order.
+        tbb::parallel_for(size_t(0), n, [&](size_t i) {
+            if (keeper[i] < 0 || fresh[i]) return;
             const CacheRecord& r = records[size_t(keeper[i])];
             const CacheEntry e = cache->state.cache.object(r.object).get(r.slot);
             value[i] = e.shading;
@@ -290,8 +291,9 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
             }
             age[i] = float(r.tests.age);
             sampled[i] = 1;
-            reused.push_back(int(i));
-        }
+        });
+        for (size_t i = 0; i < n; ++i)
+            if (keeper[i] >= 0 && !fresh[i]) reused.push_back(int(i));
         result.stats["stages"]["reproject"] =
             result.stats["stages"]["reproject"].get<double>() + ms_since(t0);
     }
@@ -406,22 +408,28 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
                     key_mask[i] =
                         key_light_mask(rs, keys, gb.hits[i].position, gb.hits[i].shading_normal);
             });
+        std::vector<CacheEntry> entries;
         for (size_t o = 0; o < by_object.size(); ++o) {
             ObjectCache& oc = rc.object(int(o));
             oc.reserve_for(by_object[o].size());
             const bool moving = !scene.objects[o].animation.is_static();
-            for (size_t i : by_object[o]) {
+            // The entries in parallel, their insertion (slot allocation) in pixel order.
+            const std::vector<size_t>& pixels = by_object[o];
+            entries.resize(pixels.size());
+            tbb::parallel_for(size_t(0), pixels.size(), [&](size_t m) {
+                const size_t i = pixels[m];
                 const SurfaceHit& refl = reflected[i];
-                CacheEntry entry = make_cache_entry(
-                    gb.hits[i], gb.view_dirs[i], view.to_world[o], point_at(i), value[i], field[i],
-                    shading_field[i], mirror[i], refl,
-                    refl.valid ? &view.to_world[size_t(refl.object)] : nullptr, moving, rs.time());
+                CacheEntry& entry = entries[m];
+                entry = make_cache_entry(gb.hits[i], gb.view_dirs[i], view.to_world[o], point_at(i),
+                                         value[i], field[i], shading_field[i], mirror[i], refl,
+                                         refl.valid ? &view.to_world[size_t(refl.object)] : nullptr,
+                                         moving, rs.time());
                 if (!key_mask.empty()) {
                     entry.key_light_mask = key_mask[i];
                     entry.key_light_known = true;
                 }
-                oc.insert(entry);
-            }
+            });
+            for (size_t m = 0; m < pixels.size(); ++m) oc.insert(entries[m]);
         }
         const long evicted = rc.evict_oldest(size_t(double(cache->settings.max_megabytes) * 1e6));
         result.stats["stages"]["insert"] = ms_since(t0);
