@@ -127,6 +127,14 @@ int ObjectCache::insert(const CacheEntry& e) {
     return s;
 }
 
+bool ObjectCache::key_light_known(int slot) const {
+    return flags_[size_t(slot)] & kKeyLightKnown;
+}
+
+uint8_t ObjectCache::key_light_mask(int slot) const {
+    return uint8_t((flags_[size_t(slot)] >> kKeyLightShift) & 7);
+}
+
 CacheEntry ObjectCache::get(int slot) const {
     const size_t i = size_t(slot);
     CacheEntry e;
@@ -148,8 +156,8 @@ CacheEntry ObjectCache::get(int slot) const {
     e.moving = flags_[i] & kMoving;
     e.occluded = flags_[i] & kOccluded;
     e.mirror = flags_[i] & kMirror;
-    e.key_light_mask = uint8_t((flags_[i] >> kKeyLightShift) & 7);
-    e.key_light_known = flags_[i] & kKeyLightKnown;
+    e.key_light_mask = key_light_mask(slot);
+    e.key_light_known = key_light_known(slot);
     e.reflected_object = reflected_object_[i];
     e.reflected_position = reflected_position_[i];
     e.reflected_normal = octahedral_decode_half(reflected_normal_[i]);

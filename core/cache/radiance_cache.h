@@ -61,6 +61,10 @@ class ObjectCache {
     void reserve_for(size_t count);
     int insert(const CacheEntry& e);  // into a free slot (grows if none; call reserve_for first)
     CacheEntry get(int slot) const;
+    // get(slot).key_light_known and .key_light_mask alone (the per-frame key-light test of every
+    // reused entry reads nothing else; a whole get() decodes ~20 arrays).
+    bool key_light_known(int slot) const;
+    uint8_t key_light_mask(int slot) const;
     bool live(int slot) const { return flags_[size_t(slot)] & 1; }
     void set_value(int slot, const vec3& shading, float weight);
     // Batch removal (seed: once per frame): the slots become free for later insertions.

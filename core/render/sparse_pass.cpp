@@ -269,10 +269,10 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
             tbb::parallel_for(size_t(0), records.size(), [&](size_t k) {
                 CacheRecord& r = records[k];
                 if (r.decision != CacheDecision::Reused) return;
-                const CacheEntry e = cache->state.cache.object(r.object).get(r.slot);
-                if (!e.key_light_known) return;
+                const ObjectCache& oc = cache->state.cache.object(r.object);
+                if (!oc.key_light_known(r.slot)) return;
                 r.tests.key_lights_tested = true;
-                r.tests.key_lights_then = e.key_light_mask;
+                r.tests.key_lights_then = oc.key_light_mask(r.slot);
                 r.tests.key_lights_now = key_light_mask(rs, keys, r.world_position,
                                                         gb.hits[size_t(r.pixel)].shading_normal);
                 r.decision = decide_key_lights(r.tests, cache->settings);
