@@ -21,9 +21,9 @@ class CounterRng {
     CounterRng(uint64_t seed, uint64_t frame, uint64_t pixel, uint64_t sample)
         : key_(mix64(mix64(mix64(mix64(seed) ^ frame) ^ pixel) ^ sample)) {}
 
-    uint32_t next_u32() { return uint32_t(mix64(key_ + 0x9e3779b97f4a7c15ULL * ++counter_) >> 32); }
+    uint32_t next_u32() { return draw(++counter_); }
     // Uniform in [0, 1): 24 random bits, so 1 - 2^-24 is the largest value.
-    float next_float() { return float(next_u32() >> 8) * 0x1p-24f; }
+    float next_float() { return to_float(next_u32()); }
     double next_double() {
         const uint64_t hi = next_u32(), lo = next_u32();
         return double(((hi << 32) | lo) >> 11) * 0x1p-53;
@@ -31,15 +31,17 @@ class CounterRng {
     // next_float() n times, in a loop the compiler vectorizes (the draws are independent).
     void fill_floats(float* out, int n) {
         const uint64_t base = counter_;
-        for (int i = 0; i < n; ++i) {
-            const uint64_t k = key_ + 0x9e3779b97f4a7c15ULL * (base + uint64_t(i) + 1);
-            out[i] = float(uint32_t(mix64(k) >> 32) >> 8) * 0x1p-24f;
-        }
+        for (int i = 0; i < n; ++i) out[i] = to_float(draw(base + uint64_t(i) + 1));
         counter_ += uint64_t(n);
     }
     uint64_t counter() const { return counter_; }
 
   private:
+    // The stream's number at position `index` (1-based): counter-based, so any order works.
+    uint32_t draw(uint64_t index) const {
+        return uint32_t(mix64(key_ + 0x9e3779b97f4a7c15ULL * index) >> 32);
+    }
+    static float to_float(uint32_t bits) { return float(bits >> 8) * 0x1p-24f; }
     uint64_t key_;
     uint64_t counter_ = 0;
 };

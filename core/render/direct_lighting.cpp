@@ -58,7 +58,6 @@ struct Scratch {
     // sample loop consumes them, and the texels they pick (see EnvironmentMap::prefetch_alias).
     std::vector<vec4> env_u;
     std::vector<vec2> light_u;
-    std::vector<int> env_texel;
     std::vector<Distribution2D::Inversion> inversions;  // stratified environment samples
     SampleArrays env, brdf;
     std::vector<float> uniforms;  // a block of the pixel's stream
@@ -181,8 +180,8 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
 
     // The random numbers first (same order as drawing them inside the loop), so that the
     // environment's table reads of all samples can be in flight together.
+    SampleArrays& e = s.env;  // its texels: e.texel
     s.env_u.clear();
-    s.env_texel.clear();
     s.light_u.clear();
     if (environment_ && sobol) {
         // CDF inversion in stages across all samples (each stage prefetches the next's reads).
@@ -190,9 +189,10 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
         for (int i = 0; i < n_env; ++i)
             s.inversions.push_back(environment_->invert_begin(env_points.at(uint32_t(i))));
         for (Distribution2D::Inversion& inv : s.inversions) environment_->invert_guide(inv);
-        for (Distribution2D::Inversion& inv : s.inversions) {
-            s.env_texel.push_back(environment_->invert_finish(inv));
-            environment_->prefetch_texel(s.env_texel.back());
+        for (size_t i = 0; i < s.inversions.size(); ++i) {
+            Distribution2D::Inversion& inv = s.inversions[i];
+            e.texel[i] = environment_->invert_finish(inv);
+            environment_->prefetch_texel(e.texel[i]);
             // The texel is chosen; only zw (the place inside it) are read from here on.
             s.env_u.emplace_back(0.0f, 0.0f, inv.within);
         }
@@ -245,15 +245,13 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
                                     b.sin_theta.data());
     }
     if (environment_ && !sobol) {
-        s.env_texel.resize(s.env_u.size());
         for (size_t i = 0; i < s.env_u.size(); ++i) {
-            s.env_texel[i] = environment_->sample_texel(s.env_u[i]);
-            environment_->prefetch_texel(s.env_texel[i]);
+            e.texel[i] = environment_->sample_texel(s.env_u[i]);
+            environment_->prefetch_texel(e.texel[i]);
         }
     }
-    SampleArrays& e = s.env;
     if (n_env > 0) {
-        environment_->sample_directions(n_env, s.env_texel.data(), s.env_u.data(), e.x.data(),
+        environment_->sample_directions(n_env, e.texel.data(), s.env_u.data(), e.x.data(),
                                         e.y.data(), e.z.data(), e.sin_theta.data());
         lobe.eval(n_env, e.x.data(), e.y.data(), e.z.data(), e.value.data(), e.other_pdf.data());
     }
@@ -265,7 +263,7 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
         b.weigh(n_brdf, ns, float(n_brdf), float(n_env));
     }
     if (n_env > 0) {
-        environment_->texel_values(n_env, s.env_texel.data(), e.sin_theta.data(), e.pdf.data(),
+        environment_->texel_values(n_env, e.texel.data(), e.sin_theta.data(), e.pdf.data(),
                                    e.radiance.data());
         e.weigh(n_env, ns, float(n_env), float(n_brdf));
     }

@@ -52,10 +52,30 @@ std::shared_ptr<const EnvironmentMap> EnvironmentMap::at_time(float time) const 
     return copy;
 }
 
-int EnvironmentMap::texel_index(vec2 uv) const {
-    const int w = image_->width, h = image_->height;
+namespace {
+
+// direction_to_uv() and texel_index(), as straight-line code (the floor by comparison, not libm)
+// that lookup_texels() inlines into a loop that vectorizes.
+inline vec2 latlong_uv(const vec3& d, float rotation_rad) {
+    // atan2 rather than acos(z): acos loses theta's precision near the poles, where the
+    // solid-angle pdf divides by sin(theta).
+    const float theta = fast_atan2(std::sqrt(d.x * d.x + d.y * d.y), d.z);
+    float phi = fast_atan2(d.y, d.x) - rotation_rad;
+    const float turns = phi / kTwoPi;
+    float whole = float(int(turns));
+    whole = whole > turns ? whole - 1.0f : whole;  // floor
+    phi -= kTwoPi * whole;
+    return vec2(phi / kTwoPi, theta / kPi);
+}
+inline int latlong_texel(vec2 uv, int w, int h) {
     const int x = std::min(int(uv.x * w), w - 1), y = std::min(int(uv.y * h), h - 1);
     return y * w + x;
+}
+
+}  // namespace
+
+int EnvironmentMap::texel_index(vec2 uv) const {
+    return latlong_texel(uv, image_->width, image_->height);
 }
 
 vec3 EnvironmentMap::eval(const vec3& d) const {
@@ -86,12 +106,7 @@ float EnvironmentMap::solid_angle_pdf(float pdf_uv, vec2 uv) {
 }
 
 vec2 EnvironmentMap::direction_to_uv(const vec3& d) const {
-    // atan2 rather than acos(z): acos loses theta's precision near the poles, where the
-    // solid-angle pdf divides by sin(theta).
-    const float theta = fast_atan2(std::sqrt(d.x * d.x + d.y * d.y), d.z);
-    float phi = fast_atan2(d.y, d.x) - glm::radians(rotation_deg_);
-    phi -= kTwoPi * std::floor(phi / kTwoPi);
-    return vec2(phi / kTwoPi, theta / kPi);
+    return latlong_uv(d, glm::radians(rotation_deg_));
 }
 
 vec3 EnvironmentMap::uv_to_direction(vec2 uv) const {
@@ -125,18 +140,10 @@ void EnvironmentMap::lookup_texels(int n, const float* x, const float* y, const 
                                    int* texel, float* sin_theta) const {
     const int w = image_->width, h = image_->height;
     const float rotation = glm::radians(rotation_deg_);
-    for (int i = 0; i < n; ++i) {  // direction_to_uv() and texel_index(), branch-free
-        const float rxy = std::sqrt(x[i] * x[i] + y[i] * y[i]);
-        const float theta = fast_atan2(rxy, z[i]);
-        float phi = fast_atan2(y[i], x[i]) - rotation;
-        const float turns = phi / kTwoPi;
-        float whole = float(int(turns));
-        whole = whole > turns ? whole - 1.0f : whole;  // floor
-        phi -= kTwoPi * whole;
-        const int column = std::min(int(phi / kTwoPi * float(w)), w - 1);
-        const int row = std::min(int(theta / kPi * float(h)), h - 1);
-        texel[i] = row * w + column;
-        sin_theta[i] = rxy;  // = sin(pi v) of the lat-long map, without the sine
+    for (int i = 0; i < n; ++i) {
+        texel[i] = latlong_texel(latlong_uv(vec3(x[i], y[i], z[i]), rotation), w, h);
+        // = sin(pi v) of the lat-long map, without the sine
+        sin_theta[i] = std::sqrt(x[i] * x[i] + y[i] * y[i]);
     }
     for (int i = 0; i < n; ++i) prefetch_texel(texel[i]);
 }

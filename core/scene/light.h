@@ -53,7 +53,8 @@ class EnvironmentMap {
     void prefetch_texel(int texel) const { __builtin_prefetch(&texels_[size_t(texel)]); }
     vec3 sample_at(int texel, const vec4& u, vec3* direction, float* pdf) const;
     // The texel holding `direction` and its (u, v); eval_with_pdf_at(texel_of(d, &uv), uv)
-    // == eval_with_pdf(d).
+    // == eval_with_pdf(d). (sample_at and these take one sample: the reference the batch
+    // calls below are tested against.)
     int texel_of(const vec3& direction, vec2* uv) const;
     vec3 eval_with_pdf_at(int texel, vec2 uv, float* pdf) const;
     // Both for n samples at once, in loops the compiler vectorizes (math/fast_math.h instead of

@@ -2,7 +2,7 @@
 // occlusion loop over exactly the rays it casts (issue "Reference direct-lighting integrator",
 // acceptance 5: the integrator should reach >= 70 % of the bare loop).
 //
-//   ./build/tests/freqlab_benchmarks --benchmark_filter=ShadowRays \
+//   ./build/tests/freqlab_benchmarks --benchmark_filter=ShadowRays
 //       --benchmark_repetitions=9 --benchmark_enable_random_interleaving=true
 // (the argument is the spp; BENCH_SCENE=path.json runs another scene).
 #include <benchmark/benchmark.h>
