@@ -32,6 +32,19 @@ vec3 sample_hg(float g, const vec3& axis, float u1, float u2) {
     return Frame(axis).to_world(vec3(sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t));
 }
 
+// sin and cos of the area lobes' tilts (a few degrees, area_tables.h) by their Taylor series
+// to the x^9 / x^8 terms: below 1e-7 up to 0.6 rad; sincosf beyond.
+float small_angle_sin(float x) {
+    if (std::abs(x) > 0.6f) return std::sin(x);
+    const float x2 = x * x;
+    return x * (1.0f + x2 * (-1.0f / 6 + x2 * (1.0f / 120 + x2 * (-1.0f / 5040 + x2 / 362880))));
+}
+float small_angle_cos(float x) {
+    if (std::abs(x) > 0.6f) return std::cos(x);
+    const float x2 = x * x;
+    return 1.0f + x2 * (-0.5f + x2 * (1.0f / 24 + x2 * (-1.0f / 720 + x2 / 40320)));
+}
+
 bool finite(const vec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
@@ -148,19 +161,17 @@ void BakeEstimator::add_scattered(EmitterKind kind, const vec3& intensity, const
                                   double distance, double shift, const vec3& emitter_normal,
                                   const SegmentOptics& optics, const vec3& n, float albedo_lum,
                                   IrradianceParts& out, BakeCounters& counters) const {
-    const HomogeneousMedium m = optics.effective();
-    if (!(m.sigma_s > 0.0) || !std::isfinite(distance) || !(distance > 0.0)) return;
+    // The segment's effective medium (§4.4) without a chain of divisions: the lookup is
+    // latency-bound (perf), so each quantity is one operation away from the optics.
+    if (!(optics.tau_s > 0.0) || !(optics.length > 0.0) || !std::isfinite(distance) ||
+        !(distance > 0.0))
+        return;
+    const double inv_length = 1.0 / optics.length;
+    const double sigma_t = (optics.tau_s + optics.tau_a) * inv_length;
+    const double albedo = optics.tau_s / (optics.tau_s + optics.tau_a);
     // Beyond the tables' last optical distance every path is attenuated by more than e^-40.
-    if (m.sigma_t() * distance > ZhDistanceTable::kMaxD) return;
-    ImpulseQuery q;
-    q.emitter = kind;
-    q.distance = distance;
-    q.shift = std::clamp(shift, 0.0, 1.0);
-    q.medium = m;
-    // The tables cover |g| <= kGRange; stronger anisotropy is clamped (stated in the header).
-    q.medium.g = std::clamp(m.g, -kGRange, kGRange);
-    q.last_bounce = std::min(settings_.media_bounces, table_bounces_);
-    q.collapsed = true;
+    const double optical_distance = sigma_t * distance;
+    if (optical_distance > ZhDistanceTable::kMaxD) return;
     double w_surface = 0.0;
     switch (settings_.back_scatter) {
         case BackScatter::Off:
@@ -176,41 +187,62 @@ void BakeEstimator::add_scattered(EmitterKind kind, const vec3& intensity, const
     // The surface variant is the infinite one at a receiver shifted kBackScatterShift optical
     // units towards the emitter (impulse_query.h); the albedo blend scales that shift, so one
     // lookup serves every mode and the two ends are exactly off and on.
-    q.variant = TableVariant::Infinite;
-    q.distance = std::max(distance - w_surface * kBackScatterShift / m.sigma_t(),
-                          ZhDistanceTable::kMinD / m.sigma_t());
-    const glm::dvec3 l(dir), nd(n);
-    auto tilted_axis = [&](double tilt) {
-        glm::dvec3 t = glm::dvec3(emitter_normal) - glm::dot(glm::dvec3(emitter_normal), l) * l;
-        const double len = glm::length(t);
-        return len > 1e-9 && tilt != 0.0 ? std::cos(tilt) * l + std::sin(tilt) * (t / len) : l;
-    };
+    const double query_optical =
+        std::max(optical_distance - w_surface * kBackScatterShift, ZhDistanceTable::kMinD);
+    // The tables cover |g| <= kGRange; stronger anisotropy is clamped (stated in the header).
+    const double g = std::clamp(optics.tau_gs / optics.tau_s, -kGRange, kGRange);
+    const int last_bounce = std::min(settings_.media_bounces, table_bounces_);
+    const double shift_q = std::clamp(shift, 0.0, 1.0);
+    const float cos_light = glm::dot(dir, n);
+    ++counters.impulse_queries;
     if (const ImpulseIrradiance* table =
-            irradiance_ ? irradiance_->get(q.medium.g, m.sigma_s / m.sigma_t(), q.last_bounce)
-                        : nullptr) {
+            irradiance_ ? irradiance_->get(g, albedo, last_bounce) : nullptr) {
         // The tabulated double product (impulse_irradiance.h): one lookup per part.
-        const ImpulseIrradiance::At D = ImpulseIrradiance::at(m.sigma_t() * q.distance);
-        const double scale = kind == EmitterKind::Directional ? 1.0 : m.sigma_t() * m.sigma_t();
+        const ImpulseIrradiance::At D = ImpulseIrradiance::at(query_optical);
+        const double scale = kind == EmitterKind::Directional ? 1.0 : sigma_t * sigma_t;
         ScatteredIrradiance e;
-        if (kind == EmitterKind::Point)
-            e = table->point(D, glm::dot(l, nd));
-        else if (kind == EmitterKind::Directional)
-            e = table->directional(D, glm::dot(l, nd));
-        else
-            e = table->area(D, q.shift, glm::dot(tilted_axis(table->tilt(D, q.shift)), nd),
-                            glm::dot(l, nd));
-        ++counters.impulse_queries;
+        if (kind == EmitterKind::Point) {
+            e = table->point(D, cos_light);
+        } else if (kind == EmitterKind::Directional) {
+            e = table->directional(D, cos_light);
+        } else {
+            // The single lobe's axis is tilted from l towards the emitter normal's part
+            // across l, t = (n_e - (n_e . l) l) / |...|, whose length is the shift itself.
+            const float tilt = float(table->tilt(D, shift_q));
+            float cos_single = cos_light;
+            if (tilt != 0.0f && shift_q > 1e-6) {
+                const float nl_l = glm::dot(emitter_normal, dir);
+                const float t_n = (glm::dot(emitter_normal, n) - nl_l * cos_light) / float(shift_q);
+                cos_single = small_angle_cos(tilt) * cos_light + small_angle_sin(tilt) * t_n;
+            }
+            e = table->area(D, shift_q, cos_single, cos_light);
+        }
         out.single += intensity * float(std::max(0.0, e.single * scale));
         out.multiple += intensity * float(std::max(0.0, e.multiple * scale));
         return;
     }
+    ImpulseQuery q;
+    q.emitter = kind;
+    q.distance = query_optical / sigma_t;
+    q.shift = shift_q;
+    q.medium = optics.effective();
+    q.medium.g = g;
+    q.last_bounce = last_bounce;
+    q.collapsed = true;
+    q.variant = TableVariant::Infinite;
     const ImpulseResponse r = query_impulse(*tables_, q);
-    ++counters.impulse_queries;
-    const ZhVector& single = r.single;
-    const ZhVector& multiple = r.multiple;
-    const glm::dvec3 axis = kind == EmitterKind::Area ? tilted_axis(r.axis_tilt) : l;
-    const double e_single = zh_double_product(kImpulseOrder, single.data(), axis, cosine_zh_, nd);
-    const double e_multiple = zh_double_product(kImpulseOrder, multiple.data(), l, cosine_zh_, nd);
+    const glm::dvec3 l(dir), nd(n);
+    glm::dvec3 axis = l;
+    if (kind == EmitterKind::Area) {
+        const glm::dvec3 nl(emitter_normal);
+        const glm::dvec3 t = nl - glm::dot(nl, l) * l;
+        const double len = glm::length(t);
+        if (len > 1e-9 && r.axis_tilt != 0.0)
+            axis = std::cos(r.axis_tilt) * l + std::sin(r.axis_tilt) * (t / len);
+    }
+    const double e_single = zh_double_product(kImpulseOrder, r.single.data(), axis, cosine_zh_, nd);
+    const double e_multiple =
+        zh_double_product(kImpulseOrder, r.multiple.data(), l, cosine_zh_, nd);
     // A truncated ZH lobe rings slightly negative far from its axis; irradiance cannot.
     out.single += intensity * float(std::max(0.0, e_single));
     out.multiple += intensity * float(std::max(0.0, e_multiple));
@@ -242,9 +274,10 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     sample_emitters(p, rng, local);
     for (const EmitterSample& s : local) {
         const float cos_x = glm::dot(n, s.dir);
-        // Below the horizon the receiver's own surface blocks the emitter (and its scattered
-        // light, which the tables would otherwise bring in from the upper hemisphere).
-        if (cos_x <= 0.0f && !scatter) continue;
+        // Below the horizon the segment to the emitter enters the receiver's own surface at
+        // once, so it is occluded and, by §5.2 (impulse contributions on unoccluded segments
+        // only), brings no scattered light either: no ray is cast for it.
+        if (cos_x <= 0.0f) continue;
         if (!visible(p, n, s.dir, s.distance, counters)) continue;
         SegmentOptics optics;
         if (attenuate) {
@@ -252,7 +285,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
                 std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
             optics = media_.integrate(p, s.dir, length);
         }
-        if (cos_x > 0.0f) parts.surface += s.irradiance * cos_x * float(optics.transmittance());
+        parts.surface += s.irradiance * cos_x * float(optics.transmittance());
         if (scatter) {
             const double distance = std::isfinite(s.distance) ? s.distance : optics.length;
             add_scattered(s.kind, s.intensity, s.dir, distance, s.shift, s.emitter_normal, optics,

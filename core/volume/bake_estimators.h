@@ -23,9 +23,9 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <string>
 #include <vector>
-#include <limits>
 
 #include "accel/ray_scene.h"
 #include "math/rng.h"

@@ -13,8 +13,8 @@ namespace freqlab {
 namespace {
 
 constexpr int kD = ImpulseIrradiance::kDistanceNodes;
-constexpr int kC = ImpulseIrradiance::kCosineNodes;
 constexpr int kS = ImpulseIrradiance::kShiftNodes;
+constexpr int kL = ImpulseIrradiance::kTerms;
 
 double node_distance(int i) {
     return ZhDistanceTable::kMinD *
@@ -25,21 +25,28 @@ double trend(double D, bool point_like) {
     return point_like ? std::exp(-D) / D : std::exp(-D);
 }
 
-double node_cosine(int j) {
-    return -1.0 + 2.0 * j / (kC - 1);
-}
-
-// E(cos) = sum_l z_l c_l P_l(cos) at every cosine node, divided by the trend.
-void fill_cosines(const ZhVector& z, const double* cosine_zh, double inv_trend, float* out) {
-    double zc[kImpulseOrder];
-    for (int l = 0; l < kImpulseOrder; ++l) zc[l] = z[size_t(l)] * cosine_zh[l];
-    for (int j = 0; j < kC; ++j) {
-        double p[kImpulseOrder];
-        legendre(kImpulseOrder, node_cosine(j), p);
-        double e = 0.0;
-        for (int l = 0; l < kImpulseOrder; ++l) e += zc[l] * p[l];
-        out[j] = float(e * inv_trend);
+// The monomial coefficients of sum_l z_l c_l P_l(x) / trend (Legendre's recurrence on the
+// coefficient vectors, in double), into out[0..kL).
+void polynomial_coefficients(const ZhVector& z, const double* cosine_zh, double inv_trend,
+                             float* out) {
+    double prev[kL] = {1.0}, cur[kL] = {0.0, 1.0}, sum[kL] = {};
+    sum[0] = z[0] * cosine_zh[0];
+    for (int k = 0; k < kL; ++k) sum[k] += z[1] * cosine_zh[1] * cur[k];
+    for (int l = 1; l + 1 < kL; ++l) {
+        // P_{l+1} = ((2l + 1) x P_l - l P_{l-1}) / (l + 1)
+        double next[kL] = {};
+        for (int k = 0; k < kL; ++k) {
+            next[k] = -double(l) * prev[k];
+            if (k > 0) next[k] += double(2 * l + 1) * cur[k - 1];
+            next[k] /= double(l + 1);
+        }
+        for (int k = 0; k < kL; ++k) {
+            prev[k] = cur[k];
+            cur[k] = next[k];
+            sum[k] += z[size_t(l + 1)] * cosine_zh[l + 1] * next[k];
+        }
     }
+    for (int k = 0; k < kL; ++k) out[k] = float(sum[k] * inv_trend);
 }
 
 }  // namespace
@@ -47,41 +54,62 @@ void fill_cosines(const ZhVector& z, const double* cosine_zh, double inv_trend, 
 ImpulseIrradiance::At ImpulseIrradiance::at(double D) {
     At a;
     if (!(D > 0.0) || D >= ZhDistanceTable::kMaxD) return a;
-    static const double inv_log_range =
-        1.0 / std::log(ZhDistanceTable::kMaxD / ZhDistanceTable::kMinD);
-    const double u = std::log(std::max(D, ZhDistanceTable::kMinD) / ZhDistanceTable::kMinD) *
-                     inv_log_range * (kD - 1);
+    // Float log and exp (libm's, 1 ulp): the index is then off by ~1e-5 of a bin and the trend
+    // by ~1e-7, far below the distance interpolation's own ~2e-3 (and half the time).
+    static const float scale =
+        float((kD - 1) / std::log(ZhDistanceTable::kMaxD / ZhDistanceTable::kMinD));
+    const float u =
+        std::log(float(std::max(D, ZhDistanceTable::kMinD) / ZhDistanceTable::kMinD)) * scale;
     a.valid = true;
     a.i = std::min(int(u), kD - 2);
-    a.fu = u - a.i;
-    a.trend_directional = std::exp(-D);
+    a.fu = u - float(a.i);
+    a.trend_directional = double(std::exp(-float(D)));
     a.trend_point = a.trend_directional / D;
     return a;
 }
 
-double ImpulseIrradiance::Grid::lookup(const At& d, double shift, double cos) const {
-    if (!d.valid) return 0.0;
-    const int i = d.i;
-    const double fu = d.fu;
-    const double v = (std::clamp(cos, -1.0, 1.0) + 1.0) * 0.5 * (kC - 1);
-    const int j = std::min(int(v), kC - 2);
-    const double fv = v - j;
-    int s0 = 0;
-    double fs = 0.0;
-    if (shifts > 1) {
-        const double w = std::clamp(shift, 0.0, 1.0) * (shifts - 1);
-        s0 = std::min(int(w), shifts - 2);
-        fs = w - s0;
+namespace {
+
+// sum_k c[k] x^k for the kL = 11 coefficients, by Estrin's scheme (a depth of 5 multiply-adds
+// instead of Horner's 10: the lookup is latency-bound).
+inline double polynomial11(const float* c, double x) {
+    const double x2 = x * x, x4 = x2 * x2, x8 = x4 * x4;
+    const double p01 = c[0] + x * c[1], p23 = c[2] + x * c[3], p45 = c[4] + x * c[5],
+                 p67 = c[6] + x * c[7], p89 = c[8] + x * c[9];
+    const double p0_3 = p01 + x2 * p23, p4_7 = p45 + x2 * p67, p8_10 = p89 + x2 * c[10];
+    return (p0_3 + x4 * p4_7) + x8 * p8_10;
+}
+static_assert(kL == 11, "polynomial11 evaluates 11 terms");
+
+}  // namespace
+
+template <int Channels, bool Shifted>
+void ImpulseIrradiance::Grid::lookup(const At& d, double shift, double cos, double out[2]) const {
+    out[0] = out[1] = 0.0;
+    if (!d.valid) return;
+    constexpr size_t row = size_t(Channels) * kL;
+    const float fu = d.fu;
+    size_t first = size_t(d.i);
+    float fs = 0.0f;
+    if constexpr (Shifted) {
+        const float ws = std::clamp(float(shift), 0.0f, 1.0f) * float(kS - 1);
+        const int s0 = std::min(int(ws), kS - 2);
+        fs = ws - float(s0);
+        first += size_t(s0) * kD;
     }
-    double sum = 0.0;
-    for (int ds = 0; ds < (shifts > 1 ? 2 : 1); ++ds) {
-        const double ws = shifts > 1 ? (ds ? fs : 1.0 - fs) : 1.0;
-        const float* row = &values[(size_t(s0 + ds) * kD + size_t(i)) * kC + size_t(j)];
-        const double a = row[0] + fv * (row[1] - row[0]);
-        const double b = row[kC] + fv * (row[kC + 1] - row[kC]);
-        sum += ws * (a + fu * (b - a));
+    // Blend the coefficient rows (a straight loop over row floats: vectorized).
+    const float* r0 = &values[first * row];
+    float coef[row];
+    for (size_t k = 0; k < row; ++k) coef[k] = r0[k] + fu * (r0[row + k] - r0[k]);
+    if constexpr (Shifted) {
+        const float* r2 = r0 + size_t(kD) * row;  // the next shift bin
+        for (size_t k = 0; k < row; ++k) {
+            const float next = r2[k] + fu * (r2[row + k] - r2[k]);
+            coef[k] += fs * (next - coef[k]);
+        }
     }
-    return sum;
+    const double x = std::clamp(cos, -1.0, 1.0);
+    for (int c = 0; c < Channels; ++c) out[c] = polynomial11(coef + size_t(c) * kL, x);
 }
 
 ImpulseIrradiance::ImpulseIrradiance(const ImpulseTables& tables, double g, double albedo,
@@ -93,11 +121,12 @@ ImpulseIrradiance::ImpulseIrradiance(const ImpulseTables& tables, double g, doub
     q.last_bounce = last_bounce;
     q.collapsed = true;
     const bool multiple = last_bounce >= 2;
-    for (Grid* grid :
-         {&point_single_, &point_multiple_, &directional_single_, &directional_multiple_})
-        grid->values.assign(size_t(kD) * kC, 0.0f);
+    for (Grid* grid : {&point_, &directional_}) {
+        grid->channels = 2;
+        grid->values.assign(size_t(kD) * 2 * kL, 0.0f);
+    }
     area_single_.shifts = kS;
-    area_single_.values.assign(size_t(kS) * kD * kC, 0.0f);
+    area_single_.values.assign(size_t(kS) * kD * kL, 0.0f);
     tilt_.assign(size_t(kS) * kD, 0.0f);
     // Sigma_s = 0 has no scattered light at all: the tables' queries need sigma_s > 0.
     if (!(albedo > 0.0)) return;
@@ -111,22 +140,19 @@ ImpulseIrradiance::ImpulseIrradiance(const ImpulseTables& tables, double g, doub
             const double inv_point = 1.0 / trend(D, true), inv_dir = 1.0 / trend(D, false);
             local.emitter = EmitterKind::Point;
             ImpulseResponse r = query_impulse(tables, local);
-            fill_cosines(r.single, cosine_zh, inv_point, &point_single_.values[size_t(i) * kC]);
+            polynomial_coefficients(r.single, cosine_zh, inv_point, point_.node(0, i, 0));
             if (multiple)
-                fill_cosines(r.multiple, cosine_zh, inv_point,
-                             &point_multiple_.values[size_t(i) * kC]);
+                polynomial_coefficients(r.multiple, cosine_zh, inv_point, point_.node(0, i, 1));
             local.emitter = EmitterKind::Directional;
             r = query_impulse(tables, local);
-            fill_cosines(r.single, cosine_zh, inv_dir, &directional_single_.values[size_t(i) * kC]);
+            polynomial_coefficients(r.single, cosine_zh, inv_dir, directional_.node(0, i, 0));
             if (multiple)
-                fill_cosines(r.multiple, cosine_zh, inv_dir,
-                             &directional_multiple_.values[size_t(i) * kC]);
+                polynomial_coefficients(r.multiple, cosine_zh, inv_dir, directional_.node(0, i, 1));
             local.emitter = EmitterKind::Area;
             for (int s = 0; s < kS; ++s) {
                 local.shift = double(s) / (kS - 1);
                 r = query_impulse(tables, local);
-                fill_cosines(r.single, cosine_zh, inv_point,
-                             &area_single_.values[(size_t(s) * kD + size_t(i)) * kC]);
+                polynomial_coefficients(r.single, cosine_zh, inv_point, area_single_.node(s, i, 0));
                 tilt_[size_t(s) * kD + size_t(i)] = float(r.axis_tilt);
             }
         });
@@ -134,34 +160,38 @@ ImpulseIrradiance::ImpulseIrradiance(const ImpulseTables& tables, double g, doub
 }
 
 ScatteredIrradiance ImpulseIrradiance::point(const At& d, double cos) const {
-    return {point_single_.lookup(d, 0.0, cos) * d.trend_point,
-            point_multiple_.lookup(d, 0.0, cos) * d.trend_point};
+    double v[2];
+    point_.lookup<2, false>(d, 0.0, cos, v);
+    return {v[0] * d.trend_point, v[1] * d.trend_point};
 }
 
 ScatteredIrradiance ImpulseIrradiance::directional(const At& d, double cos) const {
-    return {directional_single_.lookup(d, 0.0, cos) * d.trend_directional,
-            directional_multiple_.lookup(d, 0.0, cos) * d.trend_directional};
+    double v[2];
+    directional_.lookup<2, false>(d, 0.0, cos, v);
+    return {v[0] * d.trend_directional, v[1] * d.trend_directional};
 }
 
 double ImpulseIrradiance::tilt(const At& d, double shift) const {
     if (!d.valid) return 0.0;
     const int i = d.i;
-    const double fu = d.fu;
-    const double w = std::clamp(shift, 0.0, 1.0) * (kS - 1);
+    const float fu = d.fu;
+    const float w = std::clamp(float(shift), 0.0f, 1.0f) * (kS - 1);
     const int s0 = std::min(int(w), kS - 2);
-    const double fs = w - s0;
-    auto at = [&](int s, int k) { return double(tilt_[size_t(s) * kD + size_t(k)]); };
-    const double a = at(s0, i) + fu * (at(s0, i + 1) - at(s0, i));
-    const double b = at(s0 + 1, i) + fu * (at(s0 + 1, i + 1) - at(s0 + 1, i));
-    return a + fs * (b - a);
+    const float fs = w - float(s0);
+    const float* a = &tilt_[size_t(s0) * kD + size_t(i)];
+    const float* b = a + kD;
+    const float lo = a[0] + fu * (a[1] - a[0]), hi = b[0] + fu * (b[1] - b[0]);
+    return double(lo + fs * (hi - lo));
 }
 
 ScatteredIrradiance ImpulseIrradiance::area(const At& d, double shift, double cos_single,
                                             double cos_light) const {
     // Multiple scattering of an area emitter is the point emitter's at a quarter (see
     // impulse_query.h), about the light axis.
-    return {area_single_.lookup(d, shift, cos_single) * d.trend_point,
-            0.25 * point_multiple_.lookup(d, 0.0, cos_light) * d.trend_point};
+    double single[2], point[2];
+    area_single_.lookup<1, true>(d, shift, cos_single, single);
+    point_.lookup<2, false>(d, 0.0, cos_light, point);
+    return {single[0] * d.trend_point, 0.25 * point[1] * d.trend_point};
 }
 
 namespace {
@@ -190,16 +220,26 @@ std::shared_ptr<const ImpulseIrradiance> shared(const ImpulseTables& tables, uin
 
 const ImpulseIrradiance* ImpulseIrradianceCache::get(double g, double albedo,
                                                      int last_bounce) const {
+    // Most segments of a bake meet the medium they met last: no lock and no rounding then.
+    thread_local struct {
+        uint64_t owner = 0;
+        double g = NAN, albedo = NAN;
+        int last_bounce = -1;
+        uint64_t key = 0;
+        const ImpulseIrradiance* value = nullptr;
+    } last;
+    if (last.owner == id_ && last.g == g && last.albedo == albedo &&
+        last.last_bounce == last_bounce && last.value)
+        return last.value;
     const double gq = std::round(g * 65536.0) / 65536.0;
     const double cq = std::round(albedo * 65536.0) / 65536.0;
     const uint64_t key = (uint64_t(int64_t(gq * 65536.0) + 65536) << 32) |
                          (uint64_t(cq * 65536.0) << 8) | uint64_t(last_bounce & 0xff);
-    // Most segments of a bake meet the key they met last: no lock then.
-    thread_local struct {
-        uint64_t owner = 0, key = 0;
-        const ImpulseIrradiance* value = nullptr;
-    } last;
-    if (last.owner == id_ && last.key == key && last.value) return last.value;
+    if (last.owner == id_ && last.key == key && last.value) {
+        last.g = g;
+        last.albedo = albedo;
+        return last.value;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     auto it = entries_.find(key);
     const ImpulseIrradiance* found = nullptr;
@@ -209,7 +249,7 @@ const ImpulseIrradiance* ImpulseIrradianceCache::get(double g, double albedo,
         std::shared_ptr<const ImpulseIrradiance> entry = shared(tables_, key, gq, cq, last_bounce);
         found = entries_.emplace(key, std::move(entry)).first->second.get();
     }
-    if (found) last = {id_, key, found};
+    if (found) last = {id_, g, albedo, last_bounce, key, found};
     return found;
 }
 

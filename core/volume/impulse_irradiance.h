@@ -1,20 +1,23 @@
 // Scattered irradiance tables for one bake (seed, Deuxième article §5 Eq. 5.1 and Appendix 8,
 // specialised): a lightmap texel needs the impulse response only through its O(N) double
-// product with the clamped cosine, E = sum_l z_l c_l P_l(cos), so for the media of a bake
-// (a handful of (g, albedo) pairs) that product is tabulated once over optical distance and
-// cosine, and a path segment costs one bilinear lookup instead of a table query and two
-// double products. Tabulated in the canonical medium (sigma_t = 1, sigma_s = albedo) and
-// remapped like the tables themselves: x sigma_t^2 for point and area emitters, x 1 for
-// directional ones (impulse_query.h). Nothing is re-tabulated from scratch: every node is a
-// query of the impulse tables.
+// product with the clamped cosine, E(cos) = sum_l z_l c_l P_l(cos), so for the media of a bake
+// (a handful of (g, albedo) pairs) the products z_l c_l are collapsed once per distance node
+// and stored as the monomial coefficients of that degree-10 polynomial in cos: a path segment
+// costs one blend of two coefficient rows and one Horner evaluation instead of a table query
+// and two double products, exact in the cosine. Tabulated in the canonical medium
+// (sigma_t = 1, sigma_s = albedo) and remapped like the tables themselves: x sigma_t^2 for
+// point and area emitters, x 1 for directional ones (impulse_query.h). Nothing is
+// re-tabulated from scratch: every node is a query of the impulse tables.
 //
-// | grid       | nodes                                    | interpolation            |
-// |------------|------------------------------------------|--------------------------|
-// | distance D | 512, log-spaced in [kMinD, kMaxD]         | linear in log D, trend   |
-// |            |                                          | e^-D / D (point, area) or |
-// |            |                                          | e^-D (directional) divided out |
-// | cosine     | 129, uniform in [-1, 1] (lobe axis . n)   | linear                   |
-// | shift      | 8 (area: sin alpha = j / 7, as the tables) | linear                  |
+// | grid       | nodes                                      | interpolation                  |
+// |------------|--------------------------------------------|--------------------------------|
+// | distance D | 512, log-spaced in [kMinD, kMaxD]           | linear in log D, trend e^-D / D |
+// |            |                                            | (point, area) or e^-D          |
+// |            |                                            | (directional) divided out      |
+// | cosine     | none: 11 coefficients of E's polynomial    | exact                          |
+// | shift      | 8 (area: sin alpha = j / 7, as the tables) | linear                         |
+// 512 x 11 floats per part (45 KB for point, 180 KB for the 8 area shifts) stay in L2; the
+// first version, tabulated over 129 cosines, was 3.2 MB per medium and missed it.
 // Measured against query + double product: tests/test_bake.cpp.
 #pragma once
 
@@ -34,7 +37,7 @@ struct ScatteredIrradiance {
 
 class ImpulseIrradiance {
   public:
-    static constexpr int kDistanceNodes = 512, kCosineNodes = 129, kShiftNodes = 8;
+    static constexpr int kDistanceNodes = 512, kShiftNodes = 8, kTerms = kImpulseOrder;
 
     // g within the tables' range, albedo in [0, 1], last_bounce as in ImpulseQuery.
     ImpulseIrradiance(const ImpulseTables& tables, double g, double albedo, int last_bounce);
@@ -44,7 +47,8 @@ class ImpulseIrradiance {
     struct At {
         bool valid = false;
         int i = 0;
-        double fu = 0.0, trend_point = 0.0, trend_directional = 0.0;
+        float fu = 0.0f;
+        double trend_point = 0.0, trend_directional = 0.0;
     };
     static At at(double optical_distance);
 
@@ -58,14 +62,23 @@ class ImpulseIrradiance {
     ScatteredIrradiance area(const At& d, double shift, double cos_single, double cos_light) const;
 
   private:
+    // Per distance node and channel (single, multiple scattering where they share an axis),
+    // the kTerms monomial coefficients of E(cos) / trend, lowest power first.
     struct Grid {
-        // [shift][distance][cosine] values with the trend divided out.
-        std::vector<float> values;
-        int shifts = 1;
-        double lookup(const At& d, double shift, double cos) const;  // without the trend
+        std::vector<float> values;  // [shift][distance][channel][term]
+        int shifts = 1, channels = 1;
+        float* node(int shift, int i, int channel) {
+            return &values[((size_t(shift) * kDistanceNodes + size_t(i)) * size_t(channels) +
+                            size_t(channel)) *
+                           kTerms];
+        }
+        // E / trend of channel 0 and, with two channels, 1 (Shifted: area, 8 shift bins).
+        template <int Channels, bool Shifted>
+        void lookup(const At& d, double shift, double cos, double out[2]) const;
     };
-    Grid point_single_, point_multiple_, directional_single_, directional_multiple_, area_single_;
-    std::vector<float> tilt_;  // [shift][distance]
+    Grid point_, directional_;  // channels: single, multiple
+    Grid area_single_;          // 8 shifts, 1 channel
+    std::vector<float> tilt_;   // [shift][distance]
 };
 
 // The tables a bake needs, built on first use per (g, albedo, last bounce) — quantised to

@@ -31,6 +31,27 @@ DensityGrid::DensityGrid(vec3 box_min, vec3 box_max, ivec3 resolution, std::vect
     : min_(box_min), max_corner_(box_max), res_(resolution), voxels_(std::move(voxels)) {
     voxel_ = (box_max - box_min) / vec3(resolution);
     for (float v : voxels_) max_ = std::max(max_, v);
+    auto index = [&](int x, int y, int z) { return (size_t(z) * res_.y + y) * res_.x + x; };
+    march_res_ = res_;
+    for (int a = 0; a < 3; ++a) {
+        bool constant = res_[a] > 1;
+        for (int z = 0; z < res_.z && constant; ++z)
+            for (int y = 0; y < res_.y && constant; ++y)
+                for (int x = 0; x < res_.x && constant; ++x) {
+                    ivec3 first(x, y, z);
+                    first[a] = 0;
+                    constant = voxels_[index(x, y, z)] == voxels_[index(first.x, first.y, first.z)];
+                }
+        if (constant) march_res_[a] = 1;
+    }
+    march_voxel_ = (box_max - box_min) / vec3(march_res_);
+    const ivec3 padded = march_res_ + 2;
+    march_voxels_.assign(size_t(padded.x) * padded.y * padded.z, 0.0f);
+    for (int z = 0; z < march_res_.z; ++z)
+        for (int y = 0; y < march_res_.y; ++y)
+            for (int x = 0; x < march_res_.x; ++x)
+                march_voxels_[(size_t(z + 1) * padded.y + y + 1) * padded.x + x + 1] =
+                    voxels_[index(x, y, z)];
 }
 
 float DensityGrid::at(const vec3& p) const {

@@ -136,13 +136,17 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
     for (size_t i = 0; i < emitters.size(); ++i) {
         const EmitterSample& s = emitters[i];
         const float cos_x = glm::dot(n, s.dir);
-        const bool vis = visible(p, n, s.dir, s.distance, counters);
+        // As the estimator: below the horizon the receiver's own surface occludes the segment.
+        const bool vis = cos_x > 0.0f && visible(p, n, s.dir, s.distance, counters);
         const double length =
             std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
         const SegmentOptics o = media_.integrate(p, s.dir, length);
         const HomogeneousMedium m = o.effective();
         line("emitter %zu (%s): dir (%.2f, %.2f, %.2f), cos %.3f, %s", i, kinds[int(s.kind)],
-             s.dir.x, s.dir.y, s.dir.z, cos_x, vis ? "visible" : "occluded");
+             s.dir.x, s.dir.y, s.dir.z, cos_x,
+             vis            ? "visible"
+             : cos_x > 0.0f ? "occluded"
+                            : "below the horizon");
         line(
             "  segment %.3f in media: tau_s %.4f tau_a %.4f T %.4f; effective sigma_s %.4f "
             "sigma_a %.4f g %.3f",

@@ -1,0 +1,104 @@
+// Method B's per-path cost by bake method (issue "Method B, part 2", acceptance 3: an impulse
+// bake within 1.10x of a surface bake at equal samples). One path per valid texel of the
+// scene's lightmaps, single thread, so the numbers are ns per path without a thread pool's
+// noise; the per-method ratio to `surface` is the overhead the acceptance line measures.
+//   ./build/tests/freqlab_benchmarks --benchmark_filter=BakePath
+//   BENCH_BAKE_SCENE=scenes/smoke_room.json ./build/tests/freqlab_benchmarks
+//   --benchmark_filter=BakePath
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <map>
+#include <memory>
+
+#include "scene/scene_loader.h"
+#include "volume/impulse_irradiance.h"
+#include "volume/impulse_tables.h"
+#include "volume/lightmap_baker.h"
+
+using namespace freqlab;
+
+namespace {
+
+struct BakeFixture {
+    Scene scene =
+        load_scene(std::getenv("BENCH_BAKE_SCENE") ? std::getenv("BENCH_BAKE_SCENE")
+                                                   : FREQLAB_SOURCE_DIR "/scenes/cornell_fog.json");
+    EmbreeDevice device{1};
+    RayScene rays{scene, device};
+    Media media{scene.media, scene.source};
+    ImpulseTables tables = ImpulseTables::cached(30);  // the CLI's table bounces
+    std::vector<LightmapTexel> texels;
+
+    BakeFixture() {
+        rays.update(0.0f);
+        const LightmapBaker atlas(rays, media, nullptr, BakeMethod::Surface, BakeSettings{});
+        for (const ObjectLightmap& m : atlas.lightmaps())
+            for (const LightmapTexel& t : m.texels)
+                if (t.state == TexelState::Valid) texels.push_back(t);
+    }
+};
+
+BakeFixture& fixture() {
+    static BakeFixture f;
+    return f;
+}
+
+void BM_BakePath(benchmark::State& state) {
+    BakeFixture& f = fixture();
+    const BakeMethod method = BakeMethod(state.range(0));
+    const BakeEstimator estimator(f.rays, f.media, &f.tables, method, BakeSettings{});
+    BakeCounters counters;
+    uint64_t sample = 0;
+    for (auto _ : state) {
+        vec3 sum(0.0f);
+        for (size_t i = 0; i < f.texels.size(); ++i) {
+            const LightmapTexel& t = f.texels[i];
+            CounterRng rng(0, 0, i, sample);
+            sum += estimator.estimate(t.position, t.normal, t.albedo, rng, counters).total();
+        }
+        ++sample;
+        benchmark::DoNotOptimize(sum);
+    }
+    state.SetLabel(to_string(method));
+    state.counters["ns_per_path"] =
+        benchmark::Counter(double(f.texels.size()), benchmark::Counter::kIsIterationInvariantRate |
+                                                        benchmark::Counter::kInvert);
+    state.counters["rays_per_path"] =
+        double(counters.rays) / double(f.texels.size() * state.iterations());
+    state.counters["queries_per_path"] =
+        double(counters.impulse_queries) / double(f.texels.size() * state.iterations());
+}
+
+}  // namespace
+
+BENCHMARK(BM_BakePath)
+    ->Arg(int(BakeMethod::Surface))
+    ->Arg(int(BakeMethod::Extinction))
+    ->Arg(int(BakeMethod::Impulse))
+    ->Unit(benchmark::kMillisecond);
+
+namespace {
+
+// One tabulated double product (impulse_irradiance.h) at pseudo-random distances and cosines:
+// the part of an impulse query that is not the segment's tracking.
+void BM_ImpulseIrradianceLookup(benchmark::State& state) {
+    static const ImpulseTables tables = ImpulseTables::cached(30);
+    static const ImpulseIrradiance table(tables, 0.2, 0.35 / 0.4, 30);
+    const bool area = state.range(0) != 0;
+    uint64_t h = 0x9E3779B97F4A7C15ULL;
+    for (auto _ : state) {
+        h = h * 6364136223846793005ULL + 1442695040888963407ULL;
+        const double D = 0.001 + double(h >> 40) * (3.0 / double(1 << 24));
+        const double cos = double((h >> 16) & 0xffffff) * (2.0 / double(1 << 24)) - 1.0;
+        const ImpulseIrradiance::At at = ImpulseIrradiance::at(D);
+        const ScatteredIrradiance e =
+            area ? table.area(at, 0.5 * (cos + 1.0), cos, cos) : table.point(at, cos);
+        benchmark::DoNotOptimize(e);
+    }
+    state.SetLabel(area ? "area" : "point");
+}
+
+}  // namespace
+
+BENCHMARK(BM_ImpulseIrradianceLookup)->Arg(0)->Arg(1);
