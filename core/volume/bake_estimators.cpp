@@ -45,6 +45,12 @@ float small_angle_cos(float x) {
     return 1.0f + x2 * (-0.5f + x2 * (1.0f / 24 + x2 * (-1.0f / 720 + x2 / 40320)));
 }
 
+// A segment's transmittance in float (1 ulp): what a lightmap stores is float, and the double
+// exp was 4 % of an extinction bake (perf).
+float transmittance(const SegmentOptics& optics) {
+    return std::exp(-float(optics.tau_s + optics.tau_a));
+}
+
 bool finite(const vec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
@@ -195,8 +201,7 @@ void BakeEstimator::add_scattered(EmitterKind kind, const vec3& intensity, const
     const double shift_q = std::clamp(shift, 0.0, 1.0);
     const float cos_light = glm::dot(dir, n);
     ++counters.impulse_queries;
-    if (const ImpulseIrradiance* table =
-            irradiance_ ? irradiance_->get(g, albedo, last_bounce) : nullptr) {
+    if (const ImpulseIrradiance* table = irradiance_table(g, albedo, last_bounce)) {
         // The tabulated double product (impulse_irradiance.h): one lookup per part.
         const ImpulseIrradiance::At D = ImpulseIrradiance::at(query_optical);
         const double scale = kind == EmitterKind::Directional ? 1.0 : sigma_t * sigma_t;
@@ -248,6 +253,21 @@ void BakeEstimator::add_scattered(EmitterKind kind, const vec3& intensity, const
     out.multiple += intensity * float(std::max(0.0, e_multiple));
 }
 
+const ImpulseIrradiance* BakeEstimator::irradiance_table(double g, double albedo,
+                                                         int last_bounce) const {
+    if (!irradiance_) return nullptr;
+    if (media_.size() != 1) return irradiance_->get(g, albedo, last_bounce);
+    // One medium: every segment's effective g and albedo are its own (density scales both
+    // coefficients alike), so the table is resolved once per version of the coefficients.
+    const uint64_t version = media_.version();
+    if (single_version_.load(std::memory_order_acquire) == version)
+        return single_table_.load(std::memory_order_relaxed);
+    const ImpulseIrradiance* table = irradiance_->get(g, albedo, last_bounce);
+    single_table_.store(table, std::memory_order_relaxed);
+    single_version_.store(version, std::memory_order_release);
+    return table;
+}
+
 IrradianceParts BakeEstimator::estimate(const vec3& p, const vec3& n, const vec3& albedo,
                                         CounterRng& rng, BakeCounters& counters) const {
     IrradianceParts parts = method_ == BakeMethod::Vpt
@@ -285,7 +305,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
                 std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
             optics = media_.integrate(p, s.dir, length);
         }
-        parts.surface += s.irradiance * cos_x * float(optics.transmittance());
+        parts.surface += s.irradiance * cos_x * transmittance(optics);
         if (scatter) {
             const double distance = std::isfinite(s.distance) ? s.distance : optics.length;
             add_scattered(s.kind, s.intensity, s.dir, distance, s.shift, s.emitter_normal, optics,
@@ -309,9 +329,12 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     const IrradianceParts sub =
         surface_path(hit.position, hit.shading_normal, albedo_y, depth + 1, rng, counters);
     const vec3 radiance = albedo_y * kInvPi * sub.total();  // L(y -> p), diffuse
+    // A vertex that gathered nothing (its emitters hidden, its own path lost) sends nothing to
+    // attenuate or scatter: no tracking, no table lookup.
+    if (glm::all(glm::equal(radiance, vec3(0.0f)))) return parts;
     SegmentOptics optics;
     if (attenuate) optics = media_.integrate(p, dir, hit.distance);
-    parts.surface += kPi * radiance * float(optics.transmittance());
+    parts.surface += kPi * radiance * transmittance(optics);
     if (scatter) {
         // y as a differential-area emitter of intensity L dA cos_y max(n_y . u, 0) / cos_y: with
         // dA = d^2 domega / cos_y and domega = 1 / pdf, I0 = L d^2 / (cos_y pdf).

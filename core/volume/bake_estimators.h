@@ -23,6 +23,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <limits>
 #include <string>
 #include <vector>
@@ -108,6 +109,8 @@ class BakeEstimator {
                        double shift, const vec3& emitter_normal, const SegmentOptics& optics,
                        const vec3& n, float albedo_lum, IrradianceParts& out,
                        BakeCounters& counters) const;
+    // The tabulated double products for a segment's effective medium (null: query directly).
+    const ImpulseIrradiance* irradiance_table(double g, double albedo, int last_bounce) const;
     bool visible(const vec3& from, const vec3& n, const vec3& dir, double distance,
                  BakeCounters& counters) const;
     vec3 origin(const vec3& p, const vec3& n) const;
@@ -119,6 +122,9 @@ class BakeEstimator {
     BakeSettings settings_;
     int table_bounces_ = 1;
     std::unique_ptr<ImpulseIrradianceCache> irradiance_;  // impulse: tabulated double products
+    // Scenes with one medium: its table and the Media::version() it was resolved at.
+    mutable std::atomic<const ImpulseIrradiance*> single_table_{nullptr};
+    mutable std::atomic<uint64_t> single_version_{~uint64_t(0)};
     double cosine_zh_[kImpulseOrder];
 };
 

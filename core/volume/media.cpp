@@ -170,6 +170,7 @@ void Media::set_coefficients(size_t i, double sigma_s, double sigma_a, double g,
     d.sigma_a = sigma_a;
     d.g = g;
     d.density_scale = scale;
+    ++version_;
 }
 
 bool Media::clip(const Entry& e, const vec3& o, const vec3& d, double t_max, double* t0,

@@ -95,7 +95,10 @@ class Media {
     // all space and the ray is not leaving anything (directional lights' query depth).
     double exit_distance(const vec3& o, const vec3& d) const;
     // Replaces the coefficients of medium i (sliders: no grid is resampled, nothing tabulated).
+    // Not while a bake runs on these media.
     void set_coefficients(size_t i, double sigma_s, double sigma_a, double g, double scale);
+    // Counts set_coefficients() calls: what a baker resolved per medium is valid while it holds.
+    uint64_t version() const { return version_; }
 
   private:
     struct Entry {
@@ -106,6 +109,7 @@ class Media {
     bool clip(const Entry& e, const vec3& o, const vec3& d, double t_max, double* t0,
               double* t1) const;
     std::vector<Entry> media_;
+    uint64_t version_ = 0;
 };
 
 // Ray-box slab test; false when the ray misses [t_begin, t_end].
