@@ -66,8 +66,9 @@ TEST(Media, GridOpticalThicknessIsExactAgainstQuadrature) {
     }
 }
 
-// march() walks a height-fog ramp collapsed to one voxel in x and y (media.h), and must still
-// integrate exactly what at() reads, voxel by voxel; a brush grid next to it is not collapsed.
+// A height-fog ramp is collapsed to one voxel in x and y and integrated from prefix sums along
+// z (media.h); it must still integrate exactly what at() reads, voxel by voxel. A brush grid
+// next to it varies along every axis and is marched.
 TEST(Media, CollapsedGridAxesAreExactAgainstQuadrature) {
     const Media m(media_from(R"([
         {"sigma_s": 0.8, "sigma_a": 0.1,

@@ -52,6 +52,50 @@ DensityGrid::DensityGrid(vec3 box_min, vec3 box_max, ivec3 resolution, std::vect
             for (int x = 0; x < march_res_.x; ++x)
                 march_voxels_[(size_t(z + 1) * padded.y + y + 1) * padded.x + x + 1] =
                     voxels_[index(x, y, z)];
+    int varying = 0;
+    for (int a = 0; a < 3; ++a)
+        if (march_res_[a] > 1) {
+            ++varying;
+            line_axis_ = a;
+        }
+    if (varying == 0) line_axis_ = 2;
+    if (varying <= 1) {
+        const int n = march_res_[line_axis_];
+        line_.resize(size_t(n));
+        prefix_.assign(size_t(n) + 1, 0.0);
+        for (int k = 0; k < n; ++k) {
+            ivec3 c(0);
+            c[line_axis_] = k;
+            line_[size_t(k)] = voxels_[index(c.x, c.y, c.z)];
+            prefix_[size_t(k) + 1] =
+                prefix_[size_t(k)] + line_[size_t(k)] * march_voxel_[line_axis_];
+        }
+    } else {
+        line_axis_ = -1;
+    }
+}
+
+double DensityGrid::integral(const vec3& o, const vec3& d, double t_begin, double t_end) const {
+    if (line_axis_ < 0) {
+        double sum = 0.0;
+        march(o, d, t_begin, t_end, [&](double a, double b, float v) { sum += (b - a) * v; });
+        return sum;
+    }
+    double ta = t_begin, tb = t_end;
+    if (!clip_to_box(min_, max_corner_, o, d, &ta, &tb)) return 0.0;
+    const int a = line_axis_;
+    const int n = int(line_.size());
+    const double base = min_[a], size = march_voxel_[a];
+    const double z0 = double(o[a]) + ta * double(d[a]), z1 = double(o[a]) + tb * double(d[a]);
+    auto cell = [&](double z) { return std::clamp(int(std::floor((z - base) / size)), 0, n - 1); };
+    const int c0 = cell(z0), c1 = cell(z1);
+    // One cell: constant along the segment (also every ray parallel to the cells' faces).
+    if (c0 == c1) return line_[size_t(c0)] * (tb - ta);
+    // Otherwise d[a] != 0: the density integrated over z, divided by |dz / dt|.
+    auto prefix = [&](double z, int c) {
+        return prefix_[size_t(c)] + line_[size_t(c)] * (z - (base + c * size));
+    };
+    return std::abs(prefix(z1, c1) - prefix(z0, c0)) / std::abs(double(d[a]));
 }
 
 float DensityGrid::at(const vec3& p) const {
@@ -225,8 +269,7 @@ SegmentOptics Media::integrate(const vec3& o, const vec3& d, double t_max) const
         if (!clip(e, o, d, t_max, &t0, &t1)) continue;
         double density_length = 0.0;  // integral of the density over the segment
         if (e.grid)
-            e.grid->march(o, d, t0, t1,
-                          [&](double a, double b, float v) { density_length += (b - a) * v; });
+            density_length = e.grid->integral(o, d, t0, t1);
         else
             density_length = t1 - t0;
         density_length *= e.desc.density_scale;

@@ -5,7 +5,8 @@
 //
 // Grids are piecewise constant per voxel (the value at the voxel centre), so every quantity
 // along a ray is exact: a 3D DDA visits the voxels and sums density x length ("exact ray
-// marching of the grid"). Free flights invert the optical thickness exactly (regular
+// marching of the grid"); a grid that varies along one axis only (height fog) is integrated in
+// O(1) from prefix sums along that axis. Free flights invert the optical thickness exactly (regular
 // tracking); several media superpose, and the first collision in their sum is the nearest of
 // the per-medium first collisions (competing exponentials), so each is sampled on its own.
 //
@@ -42,6 +43,9 @@ class DensityGrid {
     // Calls fn(t0, t1, density) for the voxel runs the ray crosses inside [t_begin, t_end].
     template <class Fn>
     void march(const vec3& o, const vec3& d, double t_begin, double t_end, Fn&& fn) const;
+    // The integral of the density over [t_begin, t_end]: march() summed, or, for a grid that
+    // varies along one axis only (a height-fog ramp), in O(1) from prefix sums along it.
+    double integral(const vec3& o, const vec3& d, double t_begin, double t_end) const;
 
   private:
     vec3 min_, max_corner_, voxel_;
@@ -54,6 +58,10 @@ class DensityGrid {
     vec3 march_voxel_;
     ivec3 march_res_;
     std::vector<float> march_voxels_;
+    // Grids that vary along one axis only: that axis, its values and their prefix integrals
+    // (prefix_[k] = sum over cells j < k of value x cell size); line_axis_ < 0 otherwise.
+    int line_axis_ = -1;
+    std::vector<double> line_, prefix_;
 };
 
 struct SegmentOptics {
