@@ -264,8 +264,18 @@ TEST(Bake, TabulatedIrradianceMatchesQueryAndDoubleProduct) {
         // Scale: the response's largest magnitude at this distance (its value facing the axis).
         const double scale = std::max(std::abs(single), std::abs(multiple)) +
                              zh_double_product(kImpulseOrder, r.single.data(), z, cosine_zh, z);
-        const double err =
-            std::max(std::abs(e.single - single), std::abs(e.multiple - multiple)) / scale;
+        double err = std::max(std::abs(e.single - single), std::abs(e.multiple - multiple)) / scale;
+        // The probes' lobes: the response's own first 3 ZH coefficients, against the query's,
+        // relative to the largest of them.
+        const ImpulseIrradiance::Lobes lobes = table.lobes(q.emitter, at, shift);
+        double lobe_scale = 1e-30, lobe_err = 0.0;
+        for (int b = 0; b < ImpulseIrradiance::kProbeBands; ++b)
+            lobe_scale = std::max(
+                {lobe_scale, std::abs(r.single[size_t(b)]), std::abs(r.multiple[size_t(b)])});
+        for (int b = 0; b < ImpulseIrradiance::kProbeBands; ++b)
+            lobe_err = std::max({lobe_err, std::abs(lobes.single[b] - r.single[size_t(b)]),
+                                 std::abs(lobes.multiple[b] - r.multiple[size_t(b)])});
+        err = std::max(err, lobe_err / lobe_scale);
         worst = std::max(worst, err);
         EXPECT_LT(err, 5e-3) << "kind " << kind << " D " << D << " cos " << cos << " shift "
                              << shift << ": " << e.single << " vs " << single << ", " << e.multiple

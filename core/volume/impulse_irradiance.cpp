@@ -151,6 +151,13 @@ ImpulseIrradiance::ImpulseIrradiance(const ImpulseTables& tables, double g, doub
     area_single_.shifts = kS;
     area_single_.values.assign(size_t(kS) * kD * kL, 0.0f);
     tilt_.assign(size_t(kS) * kD, 0.0f);
+    constexpr int kB = kProbeBands;
+    lobe_point_.assign(size_t(kD) * 2 * kB, 0.0f);
+    lobe_directional_.assign(size_t(kD) * 2 * kB, 0.0f);
+    lobe_area_.assign(size_t(kS) * kD * kB, 0.0f);
+    auto store_lobe = [](const ZhVector& z, double inv_trend, float* out) {
+        for (int b = 0; b < kB; ++b) out[b] = float(z[size_t(b)] * inv_trend);
+    };
     // Sigma_s = 0 has no scattered light at all: the tables' queries need sigma_s > 0.
     if (!(albedo > 0.0)) return;
     // Isolated: the cache builds this while holding its lock, and a worker must not pick up an
@@ -164,19 +171,26 @@ ImpulseIrradiance::ImpulseIrradiance(const ImpulseTables& tables, double g, doub
             local.emitter = EmitterKind::Point;
             ImpulseResponse r = query_impulse(tables, local);
             polynomial_coefficients(r.single, cosine_zh, inv_point, point_.node(0, i, 0));
-            if (multiple)
+            store_lobe(r.single, inv_point, &lobe_point_[size_t(i) * 2 * kB]);
+            if (multiple) {
                 polynomial_coefficients(r.multiple, cosine_zh, inv_point, point_.node(0, i, 1));
+                store_lobe(r.multiple, inv_point, &lobe_point_[size_t(i) * 2 * kB + kB]);
+            }
             local.emitter = EmitterKind::Directional;
             r = query_impulse(tables, local);
             polynomial_coefficients(r.single, cosine_zh, inv_dir, directional_.node(0, i, 0));
-            if (multiple)
+            store_lobe(r.single, inv_dir, &lobe_directional_[size_t(i) * 2 * kB]);
+            if (multiple) {
                 polynomial_coefficients(r.multiple, cosine_zh, inv_dir, directional_.node(0, i, 1));
+                store_lobe(r.multiple, inv_dir, &lobe_directional_[size_t(i) * 2 * kB + kB]);
+            }
             local.emitter = EmitterKind::Area;
             for (int s = 0; s < kS; ++s) {
                 local.shift = double(s) / (kS - 1);
                 r = query_impulse(tables, local);
                 polynomial_coefficients(r.single, cosine_zh, inv_point, area_single_.node(s, i, 0));
                 tilt_[size_t(s) * kD + size_t(i)] = float(r.axis_tilt);
+                store_lobe(r.single, inv_point, &lobe_area_[(size_t(s) * kD + size_t(i)) * kB]);
             }
         });
     });
@@ -215,6 +229,37 @@ ScatteredIrradiance ImpulseIrradiance::area(const At& d, double shift, double co
     area_single_.lookup<1, true>(d, shift, cos_single, single);
     point_.lookup<2, false>(d, 0.0, cos_light, point);
     return {single[0] * d.trend_point, 0.25 * point[1] * d.trend_point};
+}
+
+ImpulseIrradiance::Lobes ImpulseIrradiance::lobes(EmitterKind kind, const At& d,
+                                                  double shift) const {
+    Lobes out;
+    if (!d.valid) return out;
+    constexpr int kB = kProbeBands;
+    const float fu = d.fu;
+    auto lerp = [&](const float* a, size_t stride, int k) {
+        return double(a[k] + fu * (a[stride + size_t(k)] - a[k]));
+    };
+    const bool directional = kind == EmitterKind::Directional;
+    const std::vector<float>& pd = directional ? lobe_directional_ : lobe_point_;
+    const float* row = &pd[size_t(d.i) * 2 * kB];
+    const double trend = directional ? d.trend_directional : d.trend_point;
+    for (int b = 0; b < kB; ++b) {
+        out.single[b] = lerp(row, 2 * kB, b) * trend;
+        out.multiple[b] = lerp(row, 2 * kB, kB + b) * trend;
+    }
+    if (kind != EmitterKind::Area) return out;
+    // Area: single from the shifted tables, multiple the point emitter's at a quarter (area()).
+    const float w = std::clamp(float(shift), 0.0f, 1.0f) * (kS - 1);
+    const int s0 = std::min(int(w), kS - 2);
+    const double fs = w - float(s0);
+    const float* a0 = &lobe_area_[(size_t(s0) * kD + size_t(d.i)) * kB];
+    const float* a1 = a0 + size_t(kD) * kB;
+    for (int b = 0; b < kB; ++b) {
+        out.single[b] = ((1.0 - fs) * lerp(a0, kB, b) + fs * lerp(a1, kB, b)) * d.trend_point;
+        out.multiple[b] *= 0.25;
+    }
+    return out;
 }
 
 namespace {

@@ -61,6 +61,15 @@ class ImpulseIrradiance {
     double tilt(const At& d, double shift) const;
     ScatteredIrradiance area(const At& d, double shift, double cos_single, double cos_light) const;
 
+    // Light probes (order-3 SH of incident radiance): the response's own first kProbeBands ZH
+    // coefficients, single and multiple (area: multiple about the light axis), on the same
+    // distance grid and with the same normalisation as the double products above.
+    static constexpr int kProbeBands = 3;
+    struct Lobes {
+        double single[kProbeBands] = {}, multiple[kProbeBands] = {};
+    };
+    Lobes lobes(EmitterKind kind, const At& d, double shift) const;
+
   private:
     // Per distance node and channel (single, multiple scattering where they share an axis),
     // the kTerms monomial coefficients of E(cos) / trend, lowest power first.
@@ -79,6 +88,8 @@ class ImpulseIrradiance {
     Grid point_, directional_;  // channels: single, multiple
     Grid area_single_;          // 8 shifts, 1 channel
     std::vector<float> tilt_;   // [shift][distance]
+    // [distance][single 0..2, multiple 0..2] (point, directional); [shift][distance][0..2] (area)
+    std::vector<float> lobe_point_, lobe_directional_, lobe_area_;
 };
 
 // The tables a bake needs, built on first use per (g, albedo, last bounce) — quantised to

@@ -29,11 +29,12 @@ void add_sh(std::array<vec3, 9>& dst, const vec3& value, const vec3& dir) {
     for (int k = 0; k < 9; ++k) dst[size_t(k)] += value * float(y[k]);
 }
 
-// The first 3 bands of a ZH lobe about `axis`, times `intensity`, into dst.
-void add_lobe(std::array<vec3, 9>& dst, const vec3& intensity, const ZhVector& zh,
+// The first 3 bands of a ZH lobe (zh[0..2]) about `axis`, times `intensity`, into dst.
+void add_lobe(std::array<vec3, 9>& dst, const vec3& intensity, const double* zh,
               const glm::dvec3& axis) {
+    static_assert(ImpulseIrradiance::kProbeBands == kProbeOrder, "probe lobes are order 3");
     double sh[9];
-    zh_rotate(kProbeOrder, zh.data(), axis, sh);
+    zh_rotate(kProbeOrder, zh, axis, sh);
     for (int k = 0; k < 9; ++k) dst[size_t(k)] += intensity * float(sh[k]);
 }
 
@@ -45,31 +46,49 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
     const bool attenuate = method_ != BakeMethod::Surface && !media_.empty();
     const bool scatter = method_ == BakeMethod::Impulse && !media_.empty() && tables_;
     const vec3 no_offset(0.0f);
+    auto tilted = [](const glm::dvec3& l, const vec3& emitter_normal, double tilt) {
+        const glm::dvec3 t =
+            glm::dvec3(emitter_normal) - glm::dot(glm::dvec3(emitter_normal), l) * l;
+        const double len = glm::length(t);
+        return len > 1e-9 ? std::cos(tilt) * l + std::sin(tilt) * (t / len) : l;
+    };
     auto scattered = [&](EmitterKind kind, const vec3& intensity, const vec3& dir, double distance,
                          double shift, const vec3& emitter_normal, const SegmentOptics& optics) {
         const HomogeneousMedium m = optics.effective();
         if (!(m.sigma_s > 0.0) || !std::isfinite(distance) || !(distance > 0.0) ||
             m.sigma_t() * distance > ZhDistanceTable::kMaxD)
             return;
+        const double g = std::clamp(m.g, -kGRange, kGRange);
+        const int last_bounce = std::min(settings_.media_bounces, table_bounces_);
+        const glm::dvec3 l(dir);
+        if (const ImpulseIrradiance* table =
+                irradiance_table(g, m.sigma_s / m.sigma_t(), last_bounce)) {
+            // The tabulated lobes (impulse_irradiance.h): one lookup instead of a table query.
+            ++counters.impulse_queries;
+            const double sigma_t = m.sigma_t();
+            const ImpulseIrradiance::At D = ImpulseIrradiance::at(sigma_t * distance);
+            const ImpulseIrradiance::Lobes lobes = table->lobes(kind, D, shift);
+            const float scale = kind == EmitterKind::Directional ? 1.0f : float(sigma_t * sigma_t);
+            const glm::dvec3 axis =
+                kind == EmitterKind::Area ? tilted(l, emitter_normal, table->tilt(D, shift)) : l;
+            add_lobe(out.single, intensity * scale, lobes.single, axis);
+            add_lobe(out.multiple, intensity * scale, lobes.multiple, l);
+            return;
+        }
         ImpulseQuery q;
         q.emitter = kind;
         q.distance = distance;
         q.shift = std::clamp(shift, 0.0, 1.0);
         q.medium = m;
-        q.medium.g = std::clamp(m.g, -kGRange, kGRange);
-        q.last_bounce = std::min(settings_.media_bounces, table_bounces_);
+        q.medium.g = g;
+        q.last_bounce = last_bounce;
         q.collapsed = true;
         const ImpulseResponse r = query_impulse(*tables_, q);
         ++counters.impulse_queries;
-        const glm::dvec3 l(dir);
-        glm::dvec3 axis = l;
-        if (kind == EmitterKind::Area) {
-            glm::dvec3 t = glm::dvec3(emitter_normal) - glm::dot(glm::dvec3(emitter_normal), l) * l;
-            const double len = glm::length(t);
-            if (len > 1e-9) axis = std::cos(r.axis_tilt) * l + std::sin(r.axis_tilt) * (t / len);
-        }
-        add_lobe(out.single, intensity, r.single, axis);
-        add_lobe(out.multiple, intensity, r.multiple, l);
+        const glm::dvec3 axis =
+            kind == EmitterKind::Area ? tilted(l, emitter_normal, r.axis_tilt) : l;
+        add_lobe(out.single, intensity, r.single.data(), axis);
+        add_lobe(out.multiple, intensity, r.multiple.data(), l);
     };
 
     std::vector<EmitterSample> emitters;
@@ -107,6 +126,7 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
     const IrradianceParts sub =
         surface_path(hit.position, hit.shading_normal, albedo_y, 1, rng, counters);
     const vec3 radiance = albedo_y * kInvPi * sub.total();
+    if (glm::all(glm::equal(radiance, vec3(0.0f)))) return out;
     SegmentOptics optics;
     if (attenuate) optics = media_.integrate(p, dir, hit.distance);
     add_sh(out.surface, kFourPi * radiance * float(optics.transmittance()), dir);
