@@ -5,7 +5,8 @@
 //     lm_irradiance against the reference over all valid texels after every pass;
 //   - time for VPT to reach impulse's final error (log-log interpolation on its curve) over
 //     impulse's time;
-//   - overhead: impulse over surface bake time at equal samples (median of 3 interleaved runs);
+//   - overhead: impulse (and extinction) over surface bake time at equal samples (median of the
+//     ratios of 5 interleaved runs);
 //   - re-bake: sigma_s of medium 0 scaled by 1.5, then the first pass (1 sample: the first
 //     progressive preview) and the whole re-bake timed, tables untouched.
 // Writes bench_bake.json, bench_bake.csv (every pass of every curve) and
@@ -114,17 +115,24 @@ int run_bench_bake(const BenchArgs& a) {
     const double impulse_error = c_impulse.back().relmse, impulse_ms = c_impulse.back().ms;
     const double vpt_ms = curves ? time_to_reach(c_vpt, impulse_error) : -1.0;
 
-    // Overhead at equal samples: surface and impulse interleaved, 3 runs each, medians.
+    // Overhead at equal samples: surface, extinction and impulse interleaved, 5 runs each; the
+    // ratio is the median of the per-run ratios (this machine's speed drifts by +-20 % between
+    // runs, less within one).
     BakeSettings equal = settings;
     equal.spp = a.overhead_spp;
-    std::vector<double> t_surface, t_impulse;
-    for (int run = 0; run < 3; ++run) {
+    std::vector<double> t_surface, t_extinction, t_impulse, r_extinction, r_impulse;
+    for (int run = 0; run < 5; ++run) {
         LightmapBaker s(rays, media, nullptr, BakeMethod::Surface, equal);
         s.run();
         t_surface.push_back(s.stats().bake_ms);
+        LightmapBaker e(rays, media, nullptr, BakeMethod::Extinction, equal);
+        e.run();
+        t_extinction.push_back(e.stats().bake_ms);
         LightmapBaker i(rays, media, &tables, BakeMethod::Impulse, equal);
         i.run();
         t_impulse.push_back(i.stats().bake_ms);
+        r_extinction.push_back(t_extinction.back() / t_surface.back());
+        r_impulse.push_back(t_impulse.back() / t_surface.back());
     }
 
     // Re-bake after a sigma_s change: the atlas and tables stay, the sums restart.
@@ -171,8 +179,11 @@ int run_bench_bake(const BenchArgs& a) {
         {"overhead",
          {{"spp", a.overhead_spp},
           {"surface_ms_median", median(t_surface)},
+          {"extinction_ms_median", median(t_extinction)},
           {"impulse_ms_median", median(t_impulse)},
-          {"impulse_over_surface", median(t_impulse) / median(t_surface)}}},
+          {"extinction_over_surface", median(r_extinction)},
+          {"impulse_over_surface", median(r_impulse)},
+          {"impulse_over_surface_runs", r_impulse}}},
         {"rebake",
          {{"change", "sigma_s x 1.5 of " + d0.name},
           {"spp", a.overhead_spp},
