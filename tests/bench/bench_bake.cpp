@@ -102,3 +102,26 @@ void BM_ImpulseIrradianceLookup(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(BM_ImpulseIrradianceLookup)->Arg(0)->Arg(1);
+
+namespace {
+
+// Media::integrate on segments from random points of the scene's box towards random
+// directions (length 2): a segment's tracking, without its ray.
+void BM_MediaIntegrate(benchmark::State& state) {
+    BakeFixture& f = fixture();
+    const vec3 lo = f.rays.bounds_min(), hi = f.rays.bounds_max();
+    uint64_t h = 0x9E3779B97F4A7C15ULL;
+    auto next = [&] {
+        h = h * 6364136223846793005ULL + 1442695040888963407ULL;
+        return float(h >> 40) * (1.0f / float(1 << 24));
+    };
+    for (auto _ : state) {
+        const vec3 o = lo + (hi - lo) * vec3(next(), next(), next());
+        const vec3 d = glm::normalize(vec3(next() - 0.5f, next() - 0.5f, next() - 0.5f));
+        benchmark::DoNotOptimize(f.media.integrate(o, d, 2.0));
+    }
+}
+
+}  // namespace
+
+BENCHMARK(BM_MediaIntegrate);
