@@ -34,8 +34,15 @@ const SettingsSchema& BakeSettings::schema() {
             .field(&BakeSettings::tabulated_irradiance, "tabulated_irradiance", 0, 1, "",
                    kInvalidatesBake,
                    "Impulse: tabulate the ZH x clamped-cosine double product once per medium over "
-                   "distance and cosine (one lookup per segment); off queries the tables and "
-                   "integrates per segment.")
+                   "distance, as its polynomial in the cosine (one lookup per segment); off "
+                   "queries the tables and integrates per segment.")
+            .choice(&BakeSettings::tracking, "tracking", {"exact", "ratio"}, kInvalidatesBake,
+                    "How extinction and impulse segments cross density grids: exact visits every "
+                    "voxel (3D DDA; O(1) for grids that vary along one axis); ratio tracks "
+                    "against the grid's majorant: unbiased transmittance and optical thickness "
+                    "from a few density lookups, noisier (impulse queries its tables with the "
+                    "noisy thickness: the response is not linear in it, so a small bias). "
+                    "Homogeneous media are exact either way; vpt always samples exactly.")
             .field(&BakeSettings::probes_x, "probes_x", 0, 64, "", kInvalidatesBake,
                    "Light probes along x (order-3 SH of incident radiance; 0: no probes).")
             .field(&BakeSettings::probes_y, "probes_y", 0, 64, "", kInvalidatesBake,

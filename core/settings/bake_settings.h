@@ -10,6 +10,8 @@
 namespace freqlab {
 
 enum class BackScatter { Off, Albedo, On };
+// How a bake path's segments cross density grids (core/volume/media.h).
+enum class Tracking { Exact, Ratio };
 
 struct BakeSettings {
     int spp = 64;            // paths per texel
@@ -21,8 +23,8 @@ struct BakeSettings {
     int padding = 2;              // gutter texels per chart
     float backface_tolerance = 0.3f;
     int dilation = 2;
-    bool tabulated_irradiance = true;  // impulse: double products tabulated per medium  // rings of
-                                       // texels filled around charts after a bake
+    bool tabulated_irradiance = true;  // impulse: double products tabulated per medium
+    Tracking tracking = Tracking::Exact;
     int seed = 0;
     // Light probes: a grid over the scene's bounds shrunk by 10 % (0 on any axis: none).
     int probes_x = 4, probes_y = 4, probes_z = 3;

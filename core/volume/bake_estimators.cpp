@@ -48,7 +48,9 @@ float small_angle_cos(float x) {
 // A segment's transmittance in float (1 ulp): what a lightmap stores is float, and the double
 // exp was 4 % of an extinction bake (perf).
 float transmittance(const SegmentOptics& optics) {
-    return std::exp(-float(optics.tau_s + optics.tau_a));
+    return std::isnan(optics.tau_t_exact)
+               ? std::exp(-float(optics.tau_s + optics.tau_a))
+               : std::exp(-float(optics.tau_t_exact)) * float(optics.tracked_ratio);
 }
 
 bool finite(const vec3& v) {
@@ -253,6 +255,12 @@ void BakeEstimator::add_scattered(EmitterKind kind, const vec3& intensity, const
     out.multiple += intensity * float(std::max(0.0, e_multiple));
 }
 
+SegmentOptics BakeEstimator::segment_optics(const vec3& p, const vec3& dir, double length,
+                                            CounterRng& rng) const {
+    return settings_.tracking == Tracking::Ratio ? media_.track(p, dir, length, rng)
+                                                 : media_.integrate(p, dir, length);
+}
+
 const ImpulseIrradiance* BakeEstimator::irradiance_table(double g, double albedo,
                                                          int last_bounce) const {
     if (!irradiance_) return nullptr;
@@ -303,7 +311,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
         if (attenuate) {
             const double length =
                 std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
-            optics = media_.integrate(p, s.dir, length);
+            optics = segment_optics(p, s.dir, length, rng);
         }
         parts.surface += s.irradiance * cos_x * transmittance(optics);
         if (scatter) {
@@ -333,7 +341,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     // attenuate or scatter: no tracking, no table lookup.
     if (glm::all(glm::equal(radiance, vec3(0.0f)))) return parts;
     SegmentOptics optics;
-    if (attenuate) optics = media_.integrate(p, dir, hit.distance);
+    if (attenuate) optics = segment_optics(p, dir, hit.distance, rng);
     parts.surface += kPi * radiance * transmittance(optics);
     if (scatter) {
         // y as a differential-area emitter of intensity L dA cos_y max(n_y . u, 0) / cos_y: with

@@ -109,6 +109,9 @@ class BakeEstimator {
                        double shift, const vec3& emitter_normal, const SegmentOptics& optics,
                        const vec3& n, float albedo_lum, IrradianceParts& out,
                        BakeCounters& counters) const;
+    // A path segment's optics, exact or by ratio tracking (BakeSettings::tracking).
+    SegmentOptics segment_optics(const vec3& p, const vec3& dir, double length,
+                                 CounterRng& rng) const;
     // The tabulated double products for a segment's effective medium (null: query directly).
     const ImpulseIrradiance* irradiance_table(double g, double albedo, int last_bounce) const;
     bool visible(const vec3& from, const vec3& n, const vec3& dir, double distance,

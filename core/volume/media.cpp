@@ -282,6 +282,42 @@ SegmentOptics Media::integrate(const vec3& o, const vec3& d, double t_max) const
     return s;
 }
 
+SegmentOptics Media::track(const vec3& o, const vec3& d, double t_max, CounterRng& rng) const {
+    SegmentOptics s;
+    s.length = t_max;
+    s.tau_t_exact = 0.0;
+    for (const Entry& e : media_) {
+        double t0, t1;
+        if (!clip(e, o, d, t_max, &t0, &t1)) continue;
+        const double mu = (e.desc.sigma_s + e.desc.sigma_a) * e.desc.density_scale;
+        double density_length = 0.0;
+        if (!e.grid) {
+            density_length = t1 - t0;
+            s.tau_t_exact += mu * density_length;
+        } else {
+            const double rho_max = e.grid->max_value();
+            const double rate = mu * rho_max;
+            double ta = t0, tb = t1;
+            if (rate > 0.0 && clip_to_box(e.grid->box_min(), e.grid->box_max(), o, d, &ta, &tb)) {
+                double sum = 0.0, ratio = 1.0;
+                for (double t = ta - std::log1p(-rng.next_double()) / rate; t < tb;
+                     t -= std::log1p(-rng.next_double()) / rate) {
+                    const double rho = e.grid->at(o + d * float(t));
+                    sum += rho;
+                    ratio *= 1.0 - rho / rho_max;
+                }
+                density_length = sum / rate;  // of the unscaled density, as below
+                s.tracked_ratio *= ratio;
+            }
+        }
+        density_length *= e.desc.density_scale;
+        s.tau_s += e.desc.sigma_s * density_length;
+        s.tau_a += e.desc.sigma_a * density_length;
+        s.tau_gs += e.desc.g * e.desc.sigma_s * density_length;
+    }
+    return s;
+}
+
 MediumCollision Media::sample_collision(const vec3& o, const vec3& d, double t_max,
                                         CounterRng& rng) const {
     MediumCollision best;

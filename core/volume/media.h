@@ -68,7 +68,14 @@ struct SegmentOptics {
     double length = 0.0;
     double tau_s = 0.0, tau_a = 0.0;
     double tau_gs = 0.0;  // integral of g sigma_s
-    double transmittance() const { return std::exp(-(tau_s + tau_a)); }
+    // Ratio tracking (Media::track): the optical thickness of the media integrated exactly and
+    // the ratio-tracking estimate of the others' transmittance; NaN: everything exact.
+    double tau_t_exact = std::numeric_limits<double>::quiet_NaN();
+    double tracked_ratio = 1.0;
+    double transmittance() const {
+        return std::isnan(tau_t_exact) ? std::exp(-(tau_s + tau_a))
+                                       : std::exp(-tau_t_exact) * tracked_ratio;
+    }
     HomogeneousMedium effective() const;  // vacuum for a zero-length segment
 };
 
@@ -93,6 +100,11 @@ class Media {
     // Coefficients at a point (sigma_s, sigma_a and g of the mixture).
     HomogeneousMedium at(const vec3& p) const;
     SegmentOptics integrate(const vec3& o, const vec3& d, double t_max) const;
+    // The same by ratio tracking through density grids (homogeneous media stay exact and draw
+    // nothing): points of a Poisson process at the grid's majorant rate mu rho_max give the
+    // transmittance prod (1 - rho_i / rho_max) and the density integral sum rho_i / (mu rho_max),
+    // both unbiased (Campbell's theorem for the second).
+    SegmentOptics track(const vec3& o, const vec3& d, double t_max, CounterRng& rng) const;
     double transmittance(const vec3& o, const vec3& d, double t_max) const {
         return integrate(o, d, t_max).transmittance();
     }

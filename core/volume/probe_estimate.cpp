@@ -99,7 +99,8 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
         if (attenuate || method_ == BakeMethod::Vpt) {
             const double length =
                 std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
-            optics = media_.integrate(p, s.dir, length);
+            optics = method_ == BakeMethod::Vpt ? media_.integrate(p, s.dir, length)
+                                                : segment_optics(p, s.dir, length, rng);
         }
         add_sh(out.surface, s.irradiance * float(optics.transmittance()), s.dir);
         if (scatter)
@@ -128,7 +129,7 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
     const vec3 radiance = albedo_y * kInvPi * sub.total();
     if (glm::all(glm::equal(radiance, vec3(0.0f)))) return out;
     SegmentOptics optics;
-    if (attenuate) optics = media_.integrate(p, dir, hit.distance);
+    if (attenuate) optics = segment_optics(p, dir, hit.distance, rng);
     add_sh(out.surface, kFourPi * radiance * float(optics.transmittance()), dir);
     if (scatter) {
         const float cos_y = std::max(1e-3f, std::abs(glm::dot(hit.shading_normal, dir)));
