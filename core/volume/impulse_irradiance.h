@@ -42,8 +42,8 @@ class ImpulseIrradiance {
     // g within the tables' range, albedo in [0, 1], last_bounce as in ImpulseQuery.
     ImpulseIrradiance(const ImpulseTables& tables, double g, double albedo, int last_bounce);
 
-    // Where an optical distance falls on the grid (one log and one exp, shared by the lookups
-    // of a segment); invalid at D <= 0 or D >= kMaxD (nothing scattered arrives).
+    // Where an optical distance falls on the grid (a table log2 and one exp, shared by the
+    // lookups of a segment); invalid at D <= 0 or D >= kMaxD (nothing scattered arrives).
     struct At {
         bool valid = false;
         int i = 0;
