@@ -222,6 +222,36 @@ TEST(Bake, ProgressivePassesGiveTheSameLightmap) {
     }
 }
 
+// The direct light of point and directional lights at a texel is the same on every path: reused
+// from the first (BakeEstimator::FixedDirect), the estimates are those of paths that recompute
+// it (to float rounding), with one shadow ray fewer per path after the first.
+TEST(Bake, FixedDirectLightIsReusedExactly) {
+    Fixture f(receiver_scene("0.6", R"([{"sigma_s": 0.3, "sigma_a": 0.05, "g": 0.2}])"));
+    const ImpulseTables& tables = test_support::shared_impulse_tables();
+    BakeSettings s;
+    s.bounces = 2;
+    for (BakeMethod m : {BakeMethod::Surface, BakeMethod::Extinction, BakeMethod::Impulse}) {
+        const BakeEstimator e(*f.rays, f.media, &tables, m, s);
+        BakeEstimator::FixedDirect fixed;
+        BakeCounters with, without;
+        const int paths = 64;
+        glm::dvec3 a(0.0), b(0.0);
+        for (int i = 0; i < paths; ++i) {
+            CounterRng ra(0, 1, 2, uint64_t(i)), rb(0, 1, 2, uint64_t(i));
+            a += glm::dvec3(
+                e.estimate(vec3(0.1f, -0.2f, 0.0f), vec3(0, 0, 1), vec3(0.6f), ra, with, &fixed)
+                    .total());
+            b += glm::dvec3(
+                e.estimate(vec3(0.1f, -0.2f, 0.0f), vec3(0, 0, 1), vec3(0.6f), rb, without)
+                    .total());
+        }
+        EXPECT_TRUE(fixed.known) << to_string(m);
+        EXPECT_NEAR(a.x, b.x, 1e-5 * b.x) << to_string(m);
+        EXPECT_GT(a.x, 0.0) << to_string(m);
+        EXPECT_EQ(without.rays - with.rays, paths - 1) << to_string(m);  // one point light
+    }
+}
+
 // A re-bake after a slider change (Media::set_coefficients, then reset) equals a fresh bake of
 // the changed media: nothing the estimator resolved per medium (its table) outlives the change,
 // and the change does show (the albedo and g of the fog both move).

@@ -120,12 +120,14 @@ void BakeEstimator::sample_emitters(const vec3& p, CounterRng& rng,
                 s.dir = to / float(s.distance);
                 s.irradiance = light.intensity / d2;
                 s.intensity = light.intensity;
+                s.fixed = true;
                 break;
             }
             case LightType::Directional:
                 s.kind = EmitterKind::Directional;
                 s.dir = -light.direction;
                 s.irradiance = s.intensity = light.intensity;
+                s.fixed = true;
                 break;
             case LightType::Quad: {
                 const float u1 = rng.next_float(), u2 = rng.next_float();
@@ -277,10 +279,13 @@ const ImpulseIrradiance* BakeEstimator::irradiance_table(double g, double albedo
 }
 
 IrradianceParts BakeEstimator::estimate(const vec3& p, const vec3& n, const vec3& albedo,
-                                        CounterRng& rng, BakeCounters& counters) const {
-    IrradianceParts parts = method_ == BakeMethod::Vpt
-                                ? volume_path(p, n, rng, counters)
-                                : surface_path(p, n, albedo, 0, rng, counters);
+                                        CounterRng& rng, BakeCounters& counters,
+                                        FixedDirect* fixed) const {
+    const bool reuse = fixed && settings_.tracking == Tracking::Exact;
+    IrradianceParts parts =
+        method_ == BakeMethod::Vpt
+            ? volume_path(p, n, rng, counters)
+            : surface_path(p, n, albedo, 0, rng, counters, reuse ? fixed : nullptr);
     if (!finite(parts.surface) || !finite(parts.single) || !finite(parts.multiple)) {
         ++counters.guarded;
         return {};
@@ -288,9 +293,33 @@ IrradianceParts BakeEstimator::estimate(const vec3& p, const vec3& n, const vec3
     return parts;
 }
 
+void BakeEstimator::direct_light(const EmitterSample& s, const vec3& p, const vec3& n,
+                                 float albedo_lum, CounterRng& rng, BakeCounters& counters,
+                                 IrradianceParts& parts) const {
+    const float cos_x = glm::dot(n, s.dir);
+    // Below the horizon the segment to the emitter enters the receiver's own surface at
+    // once, so it is occluded and, by §5.2 (impulse contributions on unoccluded segments
+    // only), brings no scattered light either: no ray is cast for it.
+    if (cos_x <= 0.0f) return;
+    if (!visible(p, n, s.dir, s.distance, counters)) return;
+    const bool attenuate = method_ != BakeMethod::Surface && !media_.empty();
+    SegmentOptics optics;
+    if (attenuate) {
+        const double length =
+            std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
+        optics = segment_optics(p, s.dir, length, rng);
+    }
+    parts.surface += s.irradiance * cos_x * transmittance(optics);
+    if (method_ == BakeMethod::Impulse && !media_.empty()) {
+        const double distance = std::isfinite(s.distance) ? s.distance : optics.length;
+        add_scattered(s.kind, s.intensity, s.dir, distance, s.shift, s.emitter_normal, optics, n,
+                      albedo_lum, parts, counters);
+    }
+}
+
 IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const vec3& albedo,
-                                            int depth, CounterRng& rng,
-                                            BakeCounters& counters) const {
+                                            int depth, CounterRng& rng, BakeCounters& counters,
+                                            FixedDirect* fixed) const {
     IrradianceParts parts;
     const bool attenuate = method_ != BakeMethod::Surface && !media_.empty();
     const bool scatter = method_ == BakeMethod::Impulse && !media_.empty();
@@ -300,25 +329,16 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     if (buffers.size() <= size_t(depth)) buffers.resize(size_t(depth) + 1);
     std::vector<EmitterSample> local = std::move(buffers[size_t(depth)]);
     sample_emitters(p, rng, local);
+    IrradianceParts fixed_parts;
     for (const EmitterSample& s : local) {
-        const float cos_x = glm::dot(n, s.dir);
-        // Below the horizon the segment to the emitter enters the receiver's own surface at
-        // once, so it is occluded and, by §5.2 (impulse contributions on unoccluded segments
-        // only), brings no scattered light either: no ray is cast for it.
-        if (cos_x <= 0.0f) continue;
-        if (!visible(p, n, s.dir, s.distance, counters)) continue;
-        SegmentOptics optics;
-        if (attenuate) {
-            const double length =
-                std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
-            optics = segment_optics(p, s.dir, length, rng);
-        }
-        parts.surface += s.irradiance * cos_x * transmittance(optics);
-        if (scatter) {
-            const double distance = std::isfinite(s.distance) ? s.distance : optics.length;
-            add_scattered(s.kind, s.intensity, s.dir, distance, s.shift, s.emitter_normal, optics,
-                          n, albedo_lum, parts, counters);
-        }
+        if (!fixed || !s.fixed)
+            direct_light(s, p, n, albedo_lum, rng, counters, parts);
+        else if (!fixed->known)
+            direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts);
+    }
+    if (fixed) {
+        if (!fixed->known) *fixed = {true, fixed_parts};
+        parts += fixed->parts;
     }
     buffers[size_t(depth)] = std::move(local);
     if (depth >= settings_.bounces) return parts;

@@ -63,9 +63,17 @@ class BakeEstimator {
     // `tables` is needed by Impulse only (may be null otherwise).
     BakeEstimator(const RayScene& scene, const Media& media, const ImpulseTables* tables,
                   BakeMethod method, const BakeSettings& settings);
-    // Irradiance at p (normal n, albedo of the receiver for back-scatter): one path.
+    // The part of a texel's paths that is the same for every one of them: the direct light of
+    // point and directional lights at the texel itself (no random number decides it), computed
+    // on the first path and added to the others (not with ratio tracking, which draws).
+    struct FixedDirect {
+        bool known = false;
+        IrradianceParts parts;
+    };
+    // Irradiance at p (normal n, albedo of the receiver for back-scatter): one path. `fixed`,
+    // when given, is this point's FixedDirect, filled by the first call.
     IrradianceParts estimate(const vec3& p, const vec3& n, const vec3& albedo, CounterRng& rng,
-                             BakeCounters& counters) const;
+                             BakeCounters& counters, FixedDirect* fixed = nullptr) const;
 
     // Incident radiance at a probe p as order-3 SH (9 RGB coefficients per part): one path.
     struct ProbeParts {
@@ -88,10 +96,16 @@ class BakeEstimator {
         vec3 intensity{0.0f};       // the tables' emitter strength (I, E0 or L x area)
         vec3 emitter_normal{0.0f};  // area emitters
         double shift = 0.0;         // area emitters: sin(angle of the emitter normal to -dir)
+        bool fixed = false;         // a point or directional light: the same for every path
     };
     void sample_emitters(const vec3& p, CounterRng& rng, std::vector<EmitterSample>& out) const;
     IrradianceParts surface_path(const vec3& p, const vec3& n, const vec3& albedo, int depth,
-                                 CounterRng& rng, BakeCounters& counters) const;
+                                 CounterRng& rng, BakeCounters& counters,
+                                 FixedDirect* fixed = nullptr) const;
+    // Direct light of one emitter sample at (p, n): visibility, transmittance and, for impulse,
+    // its scattered response, added to parts.
+    void direct_light(const EmitterSample& s, const vec3& p, const vec3& n, float albedo_lum,
+                      CounterRng& rng, BakeCounters& counters, IrradianceParts& parts) const;
     IrradianceParts volume_path(const vec3& p, const vec3& n, CounterRng& rng,
                                 BakeCounters& counters) const;
     // VPT's random walk from pos along dir: free flights, scattering in media (NEE, HG),

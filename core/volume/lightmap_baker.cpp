@@ -61,6 +61,8 @@ LightmapBaker::LightmapBaker(const RayScene& scene, const Media& media, const Im
 void LightmapBaker::reset() {
     sums_.assign(maps_.size(), {});
     for (size_t i = 0; i < maps_.size(); ++i) sums_[i].assign(maps_[i].texels.size(), {});
+    fixed_.assign(maps_.size(), {});  // media may have changed: computed afresh
+    for (size_t i = 0; i < maps_.size(); ++i) fixed_[i].assign(maps_[i].texels.size(), {});
     probe_sums_.assign(probe_positions_.size(), {});
     samples_ = 0;
     stats_.bake_ms = 0.0;
@@ -88,8 +90,8 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
                 // same order whatever the split into passes.
                 for (int s = first; s < first + samples; ++s) {
                     CounterRng rng(uint64_t(settings_.seed), mi, i, uint64_t(s));
-                    sums_[mi][i] +=
-                        estimator_.estimate(t.position, t.normal, t.albedo, rng, counters);
+                    sums_[mi][i] += estimator_.estimate(t.position, t.normal, t.albedo, rng,
+                                                        counters, &fixed_[mi][i]);
                 }
             }
             rays += counters.rays;

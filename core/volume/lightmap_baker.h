@@ -65,6 +65,8 @@ class LightmapBaker {
     std::vector<ObjectLightmap> maps_;
     // Per lightmap, per texel: surface, single, multiple (RGB each) summed over samples.
     std::vector<std::vector<IrradianceParts>> sums_;
+    // Per lightmap, per texel: its paths' shared direct light (BakeEstimator::FixedDirect).
+    std::vector<std::vector<BakeEstimator::FixedDirect>> fixed_;
     std::vector<vec3> probe_positions_;
     std::vector<BakeEstimator::ProbeParts> probe_sums_;
     int samples_ = 0;
