@@ -70,10 +70,10 @@ void write_line_plot(const std::filesystem::path& path, const LinePlot& plot) {
                             "); expected a TrueType file");
     };
     // Log axes tick whole decades only (1, 10, 100, ...).
-    const double xs = plot.log_x ? std::max(1.0, std::round(nice_step(x0, x1, 8)))
-                                 : nice_step(x0, x1, 8);
-    const double ys = plot.log_y ? std::max(1.0, std::round(nice_step(y0, y1, 6)))
-                                 : nice_step(y0, y1, 6);
+    const double xs =
+        plot.log_x ? std::max(1.0, std::round(nice_step(x0, x1, 8))) : nice_step(x0, x1, 8);
+    const double ys =
+        plot.log_y ? std::max(1.0, std::round(nice_step(y0, y1, 6))) : nice_step(y0, y1, 6);
     for (double x = std::ceil(x0 / xs) * xs; x <= x1 + 1e-9 * xs; x += xs) {
         ImageBufAlgo::render_line(buf, px(x), top, px(x), H - bottom, grid);
         text(px(x) - 10, H - bottom + 20, tick_label(plot.log_x ? std::pow(10.0, x) : x), 14, axis);

@@ -6,7 +6,6 @@ namespace freqlab {
 
 namespace {
 
-
 // K_l^m with the factorial ratio built as a product, stable for the orders used here.
 double sh_norm(int l, int m) {
     double ratio = 1.0;  // (l-m)! / (l+m)!
