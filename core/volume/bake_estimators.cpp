@@ -45,14 +45,6 @@ float small_angle_cos(float x) {
     return 1.0f + x2 * (-0.5f + x2 * (1.0f / 24 + x2 * (-1.0f / 720 + x2 / 40320)));
 }
 
-// A segment's transmittance in float (1 ulp): what a lightmap stores is float, and the double
-// exp was 4 % of an extinction bake (perf).
-float transmittance(const SegmentOptics& optics) {
-    return std::isnan(optics.tau_t_exact)
-               ? std::exp(-float(optics.tau_s + optics.tau_a))
-               : std::exp(-float(optics.tau_t_exact)) * float(optics.tracked_ratio);
-}
-
 bool finite(const vec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
@@ -241,20 +233,22 @@ void BakeEstimator::add_scattered(EmitterKind kind, const vec3& intensity, const
     q.variant = TableVariant::Infinite;
     const ImpulseResponse r = query_impulse(*tables_, q);
     const glm::dvec3 l(dir), nd(n);
-    glm::dvec3 axis = l;
-    if (kind == EmitterKind::Area) {
-        const glm::dvec3 nl(emitter_normal);
-        const glm::dvec3 t = nl - glm::dot(nl, l) * l;
-        const double len = glm::length(t);
-        if (len > 1e-9 && r.axis_tilt != 0.0)
-            axis = std::cos(r.axis_tilt) * l + std::sin(r.axis_tilt) * (t / len);
-    }
+    const glm::dvec3 axis =
+        kind == EmitterKind::Area ? tilted_axis(l, emitter_normal, r.axis_tilt) : l;
     const double e_single = zh_double_product(kImpulseOrder, r.single.data(), axis, cosine_zh_, nd);
     const double e_multiple =
         zh_double_product(kImpulseOrder, r.multiple.data(), l, cosine_zh_, nd);
     // A truncated ZH lobe rings slightly negative far from its axis; irradiance cannot.
     out.single += intensity * float(std::max(0.0, e_single));
     out.multiple += intensity * float(std::max(0.0, e_multiple));
+}
+
+glm::dvec3 BakeEstimator::tilted_axis(const glm::dvec3& l, const vec3& emitter_normal,
+                                      double tilt) {
+    const glm::dvec3 nl(emitter_normal);
+    const glm::dvec3 t = nl - glm::dot(nl, l) * l;
+    const double len = glm::length(t);
+    return len > 1e-9 && tilt != 0.0 ? std::cos(tilt) * l + std::sin(tilt) * (t / len) : l;
 }
 
 SegmentOptics BakeEstimator::segment_optics(const vec3& p, const vec3& dir, double length,
@@ -309,7 +303,7 @@ void BakeEstimator::direct_light(const EmitterSample& s, const vec3& p, const ve
             std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
         optics = segment_optics(p, s.dir, length, rng);
     }
-    parts.surface += s.irradiance * cos_x * transmittance(optics);
+    parts.surface += s.irradiance * cos_x * optics.transmittance_float();
     if (method_ == BakeMethod::Impulse && !media_.empty()) {
         const double distance = std::isfinite(s.distance) ? s.distance : optics.length;
         add_scattered(s.kind, s.intensity, s.dir, distance, s.shift, s.emitter_normal, optics, n,
@@ -362,7 +356,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     if (glm::all(glm::equal(radiance, vec3(0.0f)))) return parts;
     SegmentOptics optics;
     if (attenuate) optics = segment_optics(p, dir, hit.distance, rng);
-    parts.surface += kPi * radiance * transmittance(optics);
+    parts.surface += kPi * radiance * optics.transmittance_float();
     if (scatter) {
         // y as a differential-area emitter of intensity L dA cos_y max(n_y . u, 0) / cos_y: with
         // dA = d^2 domega / cos_y and domega = 1 / pdf, I0 = L d^2 / (cos_y pdf).

@@ -123,6 +123,9 @@ class BakeEstimator {
                        double shift, const vec3& emitter_normal, const SegmentOptics& optics,
                        const vec3& n, float albedo_lum, IrradianceParts& out,
                        BakeCounters& counters) const;
+    // An area emitter's single-scattered lobe axis: l tilted by `tilt` towards the part of the
+    // emitter's normal across l (area_tables.h).
+    static glm::dvec3 tilted_axis(const glm::dvec3& l, const vec3& emitter_normal, double tilt);
     // A path segment's optics, exact or by ratio tracking (BakeSettings::tracking).
     SegmentOptics segment_optics(const vec3& p, const vec3& dir, double length,
                                  CounterRng& rng) const;

@@ -263,6 +263,18 @@ HomogeneousMedium Media::at(const vec3& p) const {
     return sum;
 }
 
+namespace {
+
+// A medium's share of a segment's optics from the integral of its (unscaled) density.
+void add_medium(const MediumDesc& m, double density_length, SegmentOptics& s) {
+    const double scaled = density_length * m.density_scale;
+    s.tau_s += m.sigma_s * scaled;
+    s.tau_a += m.sigma_a * scaled;
+    s.tau_gs += m.g * m.sigma_s * scaled;
+}
+
+}  // namespace
+
 SegmentOptics Media::integrate(const vec3& o, const vec3& d, double t_max) const {
     SegmentOptics s;
     s.length = t_max;
@@ -274,10 +286,7 @@ SegmentOptics Media::integrate(const vec3& o, const vec3& d, double t_max) const
             density_length = e.grid->integral(o, d, t0, t1);
         else
             density_length = t1 - t0;
-        density_length *= e.desc.density_scale;
-        s.tau_s += e.desc.sigma_s * density_length;
-        s.tau_a += e.desc.sigma_a * density_length;
-        s.tau_gs += e.desc.g * e.desc.sigma_s * density_length;
+        add_medium(e.desc, density_length, s);
     }
     return s;
 }
@@ -306,14 +315,11 @@ SegmentOptics Media::track(const vec3& o, const vec3& d, double t_max, CounterRn
                     sum += rho;
                     ratio *= 1.0 - rho / rho_max;
                 }
-                density_length = sum / rate;  // of the unscaled density, as below
+                density_length = sum / rate;  // of the unscaled density
                 s.tracked_ratio *= ratio;
             }
         }
-        density_length *= e.desc.density_scale;
-        s.tau_s += e.desc.sigma_s * density_length;
-        s.tau_a += e.desc.sigma_a * density_length;
-        s.tau_gs += e.desc.g * e.desc.sigma_s * density_length;
+        add_medium(e.desc, density_length, s);
     }
     return s;
 }

@@ -46,12 +46,6 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
     const bool attenuate = method_ != BakeMethod::Surface && !media_.empty();
     const bool scatter = method_ == BakeMethod::Impulse && !media_.empty() && tables_;
     const vec3 no_offset(0.0f);
-    auto tilted = [](const glm::dvec3& l, const vec3& emitter_normal, double tilt) {
-        const glm::dvec3 t =
-            glm::dvec3(emitter_normal) - glm::dot(glm::dvec3(emitter_normal), l) * l;
-        const double len = glm::length(t);
-        return len > 1e-9 ? std::cos(tilt) * l + std::sin(tilt) * (t / len) : l;
-    };
     auto scattered = [&](EmitterKind kind, const vec3& intensity, const vec3& dir, double distance,
                          double shift, const vec3& emitter_normal, const SegmentOptics& optics) {
         const HomogeneousMedium m = optics.effective();
@@ -69,8 +63,9 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
             const ImpulseIrradiance::At D = ImpulseIrradiance::at(sigma_t * distance);
             const ImpulseIrradiance::Lobes lobes = table->lobes(kind, D, shift);
             const float scale = kind == EmitterKind::Directional ? 1.0f : float(sigma_t * sigma_t);
-            const glm::dvec3 axis =
-                kind == EmitterKind::Area ? tilted(l, emitter_normal, table->tilt(D, shift)) : l;
+            const glm::dvec3 axis = kind == EmitterKind::Area
+                                        ? tilted_axis(l, emitter_normal, table->tilt(D, shift))
+                                        : l;
             add_lobe(out.single, intensity * scale, lobes.single, axis);
             add_lobe(out.multiple, intensity * scale, lobes.multiple, l);
             return;
@@ -86,7 +81,7 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
         const ImpulseResponse r = query_impulse(*tables_, q);
         ++counters.impulse_queries;
         const glm::dvec3 axis =
-            kind == EmitterKind::Area ? tilted(l, emitter_normal, r.axis_tilt) : l;
+            kind == EmitterKind::Area ? tilted_axis(l, emitter_normal, r.axis_tilt) : l;
         add_lobe(out.single, intensity, r.single.data(), axis);
         add_lobe(out.multiple, intensity, r.multiple.data(), l);
     };
@@ -102,7 +97,7 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
             optics = method_ == BakeMethod::Vpt ? media_.integrate(p, s.dir, length)
                                                 : segment_optics(p, s.dir, length, rng);
         }
-        add_sh(out.surface, s.irradiance * float(optics.transmittance()), s.dir);
+        add_sh(out.surface, s.irradiance * optics.transmittance_float(), s.dir);
         if (scatter)
             scattered(s.kind, s.intensity, s.dir,
                       std::isfinite(s.distance) ? s.distance : optics.length, s.shift,
@@ -130,7 +125,7 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
     if (glm::all(glm::equal(radiance, vec3(0.0f)))) return out;
     SegmentOptics optics;
     if (attenuate) optics = segment_optics(p, dir, hit.distance, rng);
-    add_sh(out.surface, kFourPi * radiance * float(optics.transmittance()), dir);
+    add_sh(out.surface, kFourPi * radiance * optics.transmittance_float(), dir);
     if (scatter) {
         const float cos_y = std::max(1e-3f, std::abs(glm::dot(hit.shading_normal, dir)));
         const double d = hit.distance;
