@@ -82,6 +82,8 @@ BakeEstimator::BakeEstimator(const RayScene& scene, const Media& media, const Im
         if (settings.tabulated_irradiance)
             irradiance_ = std::make_unique<ImpulseIrradianceCache>(*tables);
     }
+    attenuates_ = method != BakeMethod::Surface && !media.empty();
+    scatters_ = method == BakeMethod::Impulse && !media.empty();
     zh_clamped_cosine(kImpulseOrder, cosine_zh_);
 }
 
@@ -296,15 +298,14 @@ void BakeEstimator::direct_light(const EmitterSample& s, const vec3& p, const ve
     // only), brings no scattered light either: no ray is cast for it.
     if (cos_x <= 0.0f) return;
     if (!visible(p, n, s.dir, s.distance, counters)) return;
-    const bool attenuate = method_ != BakeMethod::Surface && !media_.empty();
     SegmentOptics optics;
-    if (attenuate) {
+    if (attenuates_) {
         const double length =
             std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
         optics = segment_optics(p, s.dir, length, rng);
     }
     parts.surface += s.irradiance * cos_x * optics.transmittance_float();
-    if (method_ == BakeMethod::Impulse && !media_.empty()) {
+    if (scatters_) {
         const double distance = std::isfinite(s.distance) ? s.distance : optics.length;
         add_scattered(s.kind, s.intensity, s.dir, distance, s.shift, s.emitter_normal, optics, n,
                       albedo_lum, parts, counters);
@@ -315,8 +316,6 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
                                             int depth, CounterRng& rng, BakeCounters& counters,
                                             FixedDirect* fixed) const {
     IrradianceParts parts;
-    const bool attenuate = method_ != BakeMethod::Surface && !media_.empty();
-    const bool scatter = method_ == BakeMethod::Impulse && !media_.empty();
     const float albedo_lum = luminance(albedo);
     // One buffer per path depth and thread: no allocation per vertex.
     thread_local std::vector<std::vector<EmitterSample>> buffers;
@@ -355,9 +354,9 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     // attenuate or scatter: no tracking, no table lookup.
     if (glm::all(glm::equal(radiance, vec3(0.0f)))) return parts;
     SegmentOptics optics;
-    if (attenuate) optics = segment_optics(p, dir, hit.distance, rng);
+    if (attenuates_) optics = segment_optics(p, dir, hit.distance, rng);
     parts.surface += kPi * radiance * optics.transmittance_float();
-    if (scatter) {
+    if (scatters_) {
         // y as a differential-area emitter of intensity L dA cos_y max(n_y . u, 0) / cos_y: with
         // dA = d^2 domega / cos_y and domega = 1 / pdf, I0 = L d^2 / (cos_y pdf).
         const float cos_y = std::max(1e-3f, std::abs(glm::dot(hit.shading_normal, dir)));

@@ -141,6 +141,10 @@ class BakeEstimator {
     BakeMethod method_;
     BakeSettings settings_;
     int table_bounces_ = 1;
+    // What the method does with media on a segment (fixed at construction: which media exist
+    // never changes, only their coefficients): attenuate it (extinction, impulse, and vpt's
+    // probes' direct light) and add its scattered response (impulse).
+    bool attenuates_ = false, scatters_ = false;
     std::unique_ptr<ImpulseIrradianceCache> irradiance_;  // impulse: tabulated double products
     // Scenes with one medium: its table and the Media::version() it was resolved at.
     mutable std::atomic<const ImpulseIrradiance*> single_table_{nullptr};

@@ -43,8 +43,6 @@ void add_lobe(std::array<vec3, 9>& dst, const vec3& intensity, const double* zh,
 BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRng& rng,
                                                         BakeCounters& counters) const {
     ProbeParts out;
-    const bool attenuate = method_ != BakeMethod::Surface && !media_.empty();
-    const bool scatter = method_ == BakeMethod::Impulse && !media_.empty() && tables_;
     const vec3 no_offset(0.0f);
     auto scattered = [&](EmitterKind kind, const vec3& intensity, const vec3& dir, double distance,
                          double shift, const vec3& emitter_normal, const SegmentOptics& optics) {
@@ -91,14 +89,14 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
     for (const EmitterSample& s : emitters) {
         if (!visible(p, no_offset, s.dir, s.distance, counters)) continue;
         SegmentOptics optics;
-        if (attenuate || method_ == BakeMethod::Vpt) {
+        if (attenuates_) {
             const double length =
                 std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
             optics = method_ == BakeMethod::Vpt ? media_.integrate(p, s.dir, length)
                                                 : segment_optics(p, s.dir, length, rng);
         }
         add_sh(out.surface, s.irradiance * optics.transmittance_float(), s.dir);
-        if (scatter)
+        if (scatters_)
             scattered(s.kind, s.intensity, s.dir,
                       std::isfinite(s.distance) ? s.distance : optics.length, s.shift,
                       s.emitter_normal, optics);
@@ -124,9 +122,9 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
     const vec3 radiance = albedo_y * kInvPi * sub.total();
     if (glm::all(glm::equal(radiance, vec3(0.0f)))) return out;
     SegmentOptics optics;
-    if (attenuate) optics = segment_optics(p, dir, hit.distance, rng);
+    if (attenuates_) optics = segment_optics(p, dir, hit.distance, rng);
     add_sh(out.surface, kFourPi * radiance * optics.transmittance_float(), dir);
-    if (scatter) {
+    if (scatters_) {
         const float cos_y = std::max(1e-3f, std::abs(glm::dot(hit.shading_normal, dir)));
         const double d = hit.distance;
         scattered(EmitterKind::Area, radiance * float(d * d * kFourPi / cos_y), dir, d,
