@@ -148,7 +148,6 @@ ImpulseIrradiance::ImpulseIrradiance(const ImpulseTables& tables, double g, doub
         grid->channels = 2;
         grid->values.assign(size_t(kD) * 2 * kL, 0.0f);
     }
-    area_single_.shifts = kS;
     area_single_.values.assign(size_t(kS) * kD * kL, 0.0f);
     tilt_.assign(size_t(kS) * kD, 0.0f);
     constexpr int kB = kProbeBands;

@@ -75,7 +75,7 @@ class ImpulseIrradiance {
     // the kTerms monomial coefficients of E(cos) / trend, lowest power first.
     struct Grid {
         std::vector<float> values;  // [shift][distance][channel][term]
-        int shifts = 1, channels = 1;
+        int channels = 1;           // the shift bins (area) are the template argument of lookup()
         float* node(int shift, int i, int channel) {
             return &values[((size_t(shift) * kDistanceNodes + size_t(i)) * size_t(channels) +
                             size_t(channel)) *
