@@ -3,8 +3,9 @@
 //   - reference: VPT at --reference-spp (its own seed, so curves are not correlated with it);
 //   - curves: impulse, extinction and VPT baked progressively (1, 2, 4, ... samples), relMSE of
 //     lm_irradiance against the reference over all valid texels after every pass;
-//   - time for VPT to reach impulse's final error (log-log interpolation on its curve) over
-//     impulse's time;
+//   - for every pass of impulse's curve, the time VPT needs to reach that pass's error
+//     (log-log interpolation on VPT's curve) over that pass's time: the speed-up curve, its
+//     best point and its last (impulse's final error: its bias once converged);
 //   - overhead: impulse (and extinction) over surface bake time at equal samples (median of the
 //     ratios of 5 interleaved runs);
 //   - re-bake: sigma_s of medium 0 scaled by 1.5, then the first pass (1 sample: the first
@@ -114,6 +115,21 @@ int run_bench_bake(const BenchArgs& a) {
     }
     const double impulse_error = c_impulse.back().relmse, impulse_ms = c_impulse.back().ms;
     const double vpt_ms = curves ? time_to_reach(c_vpt, impulse_error) : -1.0;
+    // The speed-up at every impulse pass (NaN where VPT never reached that error).
+    json speedup = json::array();
+    double best_speedup = NAN;
+    int best_spp = 0;
+    for (const CurvePoint& p : c_impulse) {
+        if (!curves || p.samples == 0) continue;
+        const double t = time_to_reach(c_vpt, p.relmse);
+        const double r = t > 0 ? t / p.ms : NAN;
+        speedup.push_back({{"spp", p.samples},
+                           {"impulse_ms", p.ms},
+                           {"relmse", p.relmse},
+                           {"vpt_ms", t > 0 ? t : NAN},
+                           {"vpt_over_impulse_time", r}});
+        if (r > 0 && !(r <= best_speedup)) best_speedup = r, best_spp = p.samples;
+    }
 
     // Overhead at equal samples: surface, extinction and impulse interleaved, 5 runs each; the
     // ratio is the median of the per-run ratios (this machine's speed drifts by +-20 % between
@@ -176,6 +192,8 @@ int run_bench_bake(const BenchArgs& a) {
         {"vpt_ms_to_impulse_error", vpt_ms},
         {"vpt_over_impulse_time", vpt_ms > 0 ? vpt_ms / impulse_ms : NAN},
         {"vpt_reached_impulse_error", vpt_ms > 0},
+        {"vpt_over_impulse_time_curve", speedup},
+        {"vpt_over_impulse_time_best", {{"spp", best_spp}, {"ratio", best_speedup}}},
         {"overhead",
          {{"spp", a.overhead_spp},
           {"surface_ms_median", median(t_surface)},
