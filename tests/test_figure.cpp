@@ -4,6 +4,10 @@
 
 #include "base/error.h"
 #include "image/figure.h"
+#include "image/image_io.h"
+#include "image/line_plot.h"
+
+#include <filesystem>
 
 using namespace freqlab;
 
@@ -72,4 +76,26 @@ TEST(Figure, BadInsetsAndLayersAreErrors) {
     spec.font = "/nonexistent/font.ttf";
     spec.title = "x";
     EXPECT_THROW(compose_figure(set, spec), Error);
+}
+
+// The plot's legend sits in the top corner its curves cross least: a rising curve leaves the
+// top left free, a falling one the top right (where a swatch of the series colour must be).
+TEST(LinePlot, LegendGoesToTheTopCornerTheCurvesLeaveFree) {
+    const std::filesystem::path dir =
+        std::filesystem::temp_directory_path() / "freqlab_test_line_plot";
+    std::filesystem::create_directories(dir);
+    for (bool rising : {true, false}) {
+        LinePlot plot;
+        plot.series = {
+            {"a", vec3(1.0f, 0.0f, 0.0f), {0.0, 1.0}, {rising ? 0.0 : 1.0, rising ? 1.0 : 0.0}}};
+        const std::filesystem::path png = dir / (rising ? "rising.png" : "falling.png");
+        write_line_plot(png, plot);
+        const RgbImage img = read_rgb_image(png);
+        // Swatch centres of the two candidate places (line_plot.cpp's layout for a one-letter
+        // name on the default 900 x 520 plot).
+        auto red = [](const vec3& c) { return c.x > 0.9f && c.y < 0.05f && c.z < 0.05f; };
+        const bool left = red(img.at(113, 86)), right = red(img.at(835, 86));
+        EXPECT_EQ(left, rising) << (rising ? "rising" : "falling");
+        EXPECT_EQ(right, !rising) << (rising ? "rising" : "falling");
+    }
 }

@@ -52,7 +52,7 @@ void write_line_plot(const std::filesystem::path& path, const LinePlot& plot) {
     auto fx = [&](double x) { return plot.log_x ? std::log10(x) : x; };
     if (x1 <= x0) x1 = x0 + 1;
     if (y1 <= y0) y1 = y0 + 1;
-    const int W = plot.width, H = plot.height, left = 90, right = 20, top = 50, bottom = 60;
+    const int W = plot.width, H = plot.height, left = 90, right = 20, top = 64, bottom = 60;
     ImageBuf buf(ImageSpec(W, H, 3, TypeDesc::FLOAT));
     const float bg[] = {0.1f, 0.1f, 0.11f}, axis[] = {0.8f, 0.8f, 0.8f},
                 grid[] = {0.25f, 0.25f, 0.27f};
@@ -84,22 +84,42 @@ void write_line_plot(const std::filesystem::path& path, const LinePlot& plot) {
     }
     ImageBufAlgo::render_line(buf, left, H - bottom, W - right, H - bottom, axis);
     ImageBufAlgo::render_line(buf, left, top, left, H - bottom, axis);
-    text(left, 30, plot.title, 18, axis);
+    text(left, 26, plot.title, 18, axis);
     text(W / 2 - 40, H - 15, plot.x_label, 14, axis);
-    text(8, top - 12, plot.y_label, 14, axis);
-    for (size_t k = 0; k < plot.series.size(); ++k) {
-        const PlotSeries& s = plot.series[k];
+    text(8, top - 14, plot.y_label, 14, axis);
+    // The curves, and how many of their pixels fall in each candidate place of the legend.
+    size_t longest = 0;
+    for (const PlotSeries& s : plot.series) longest = std::max(longest, s.name.size());
+    const int legend_w = 44 + 8 * int(longest), legend_h = 8 + 20 * int(plot.series.size());
+    const int legend_y = top + 8, legend_x[2] = {left + 8, W - right - 8 - legend_w};
+    long covered[2] = {0, 0};
+    for (const PlotSeries& s : plot.series) {
         const float c[] = {s.colour.x, s.colour.y, s.colour.z};
         for (size_t i = 1; i < s.x.size(); ++i) {
             const double ya = plot.log_y ? std::log10(s.y[i - 1]) : s.y[i - 1];
             const double yb = plot.log_y ? std::log10(s.y[i]) : s.y[i];
+            const int xa = px(fx(s.x[i - 1])), xb = px(fx(s.x[i]));
             for (int t = 0; t < 2; ++t)  // two pixels thick
-                ImageBufAlgo::render_line(buf, px(fx(s.x[i - 1])), py(ya) + t, px(fx(s.x[i])),
-                                          py(yb) + t, c);
+                ImageBufAlgo::render_line(buf, xa, py(ya) + t, xb, py(yb) + t, c);
+            for (int k = 0; k <= 32; ++k) {
+                const double f = k / 32.0;
+                const double x = xa + f * (xb - xa), y = py(ya) + f * (py(yb) - py(ya));
+                for (int side = 0; side < 2; ++side)
+                    covered[side] += x >= legend_x[side] && x <= legend_x[side] + legend_w &&
+                                     y >= legend_y && y <= legend_y + legend_h;
+            }
         }
-        const int ly = top + 12 + 20 * int(k);
-        ImageBufAlgo::render_box(buf, left + 12, ly - 10, left + 26, ly + 2, c, true);
-        text(left + 32, ly + 2, s.name, 14, axis);
+    }
+    // The legend on a box of its own, in the top corner the curves cross least.
+    const int lx = legend_x[covered[1] < covered[0] ? 1 : 0];
+    ImageBufAlgo::render_box(buf, lx, legend_y, lx + legend_w, legend_y + legend_h, bg, true);
+    ImageBufAlgo::render_box(buf, lx, legend_y, lx + legend_w, legend_y + legend_h, grid, false);
+    for (size_t k = 0; k < plot.series.size(); ++k) {
+        const PlotSeries& s = plot.series[k];
+        const float c[] = {s.colour.x, s.colour.y, s.colour.z};
+        const int ly = legend_y + 20 + 20 * int(k);
+        ImageBufAlgo::render_box(buf, lx + 8, ly - 12, lx + 22, ly, c, true);
+        text(lx + 28, ly, s.name, 14, axis);
     }
     std::vector<unsigned char> rgb(size_t(W) * H * 3);
     std::vector<float> pixels(size_t(W) * H * 3);

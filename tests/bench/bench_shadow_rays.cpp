@@ -32,6 +32,8 @@ struct Fixture {
     int spp, width, height;
     GBuffer gbuffer;
     std::vector<Ray> recorded;  // the integrator's shadow rays, in the order it cast them
+    std::vector<size_t> calls;  // where each of its occluded_stream calls (one a pixel) begins
+    std::vector<int> call_row;  // the image row of each call
 
     explicit Fixture(int spp_)
         : spp(spp_),
@@ -48,9 +50,15 @@ struct Fixture {
         lighting.record_rays(&recorded);
         for (size_t i = 0; i < gbuffer.hits.size(); ++i) {
             CounterRng rng(0, 0, i, 0);
+            const size_t before = recorded.size();
             if (gbuffer.hits[i].valid)
                 lighting.shade_hit(gbuffer.hits[i], -gbuffer.view_dirs[i], spp, rng);
+            if (recorded.size() > before) {
+                calls.push_back(before);
+                call_row.push_back(int(i) / width);
+            }
         }
+        calls.push_back(recorded.size());
     }
 };
 
@@ -114,6 +122,34 @@ void BM_ShadowRays_BareEmbree(benchmark::State& state) {
         benchmark::Counter(double(rays) * 1e-6, benchmark::Counter::kIsRate);
 }
 
+// The integrator's casting alone: the same rays through the same RayScene::occluded_stream
+// calls (one a pixel, rows in parallel as above), without the shading around them. Integrator
+// minus this is its shading time.
+void BM_ShadowRays_IntegratorCasts(benchmark::State& state) {
+    Fixture& f = fixture(int(state.range(0)));
+    std::vector<std::pair<size_t, size_t>> rows(size_t(f.height), {0, 0});  // call range a row
+    for (size_t c = 0; c + 1 < f.calls.size(); ++c) {
+        auto& r = rows[size_t(f.call_row[c])];
+        if (r.first == r.second) r.first = c;
+        r.second = c + 1;
+    }
+    long rays = 0;
+    for (auto _ : state) {
+        tbb::parallel_for(0, f.height, [&](int y) {
+            static thread_local std::unique_ptr<bool[]> occluded;
+            static thread_local size_t capacity = 0;
+            for (size_t c = rows[size_t(y)].first; c < rows[size_t(y)].second; ++c) {
+                const size_t begin = f.calls[c], n = f.calls[c + 1] - begin;
+                if (capacity < n) occluded.reset(new bool[capacity = n]);
+                f.rays.occluded_stream(&f.recorded[begin], int(n), occluded.get());
+            }
+        });
+        rays += long(f.recorded.size());
+    }
+    state.counters["Mrays/s"] =
+        benchmark::Counter(double(rays) * 1e-6, benchmark::Counter::kIsRate);
+}
+
 // The same rays as 8-wide packets in cast order (consecutive rays mostly share a shading
 // point, so a packet is coherent at its origin): what a packet-casting integrator could reach.
 void BM_ShadowRays_BareEmbreePackets8(benchmark::State& state) {
@@ -151,6 +187,11 @@ void BM_ShadowRays_BareEmbreePackets8(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(BM_ShadowRays_Integrator)
+    ->Arg(16)
+    ->Arg(256)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_ShadowRays_IntegratorCasts)
     ->Arg(16)
     ->Arg(256)
     ->Unit(benchmark::kMillisecond)
