@@ -346,6 +346,7 @@ bool Workbench::set_layer(const std::string& name) {
 }
 
 void Workbench::apply_setting(const std::string& assignment) {
+    if (s_->bake && assignment.rfind("bake.", 0) == 0) return apply_bake_setting(*s_, assignment);
     SettingsGroup group = s_->config.settings_group();
     const uint32_t flags = group.apply_assignment(assignment, "workbench");
     if (flags & (kInvalidatesGBuffer | kInvalidatesShading))

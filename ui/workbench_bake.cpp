@@ -316,4 +316,95 @@ void draw_probe_lobes(Workbench::State& s) {
     }
 }
 
+BakeMethod bake_method(const Workbench::State& s) {
+    return s.bake->method;
+}
+
+void apply_bake_setting(Workbench::State& s, const std::string& assignment) {
+    BakeSession& b = *s.bake;
+    // Checked on a copy first: a bad assignment throws with the running bake untouched.
+    BakeSettings edited = b.settings;
+    SettingsGroup group;
+    group.bind(BakeSettings::schema(), &edited);
+    group.apply_assignment(assignment, "workbench");
+    s.reference_job.reset();  // the jobs read b.settings: stop them before it changes
+    b.job.reset();
+    b.settings = edited;
+    b.baker_dirty = true;
+    restart_renderer(s);
+}
+
+nlohmann::json bake_session_to_json(const Workbench::State& s) {
+    const BakeSession& b = *s.bake;
+    BakeSettings settings = b.settings;
+    SettingsGroup group;
+    group.bind(BakeSettings::schema(), &settings);
+    nlohmann::json media = nlohmann::json::array();
+    for (size_t i = 0; i < b.media->size(); ++i) {
+        const MediumDesc& d = b.media->desc(i);
+        media.push_back({{"name", d.name},
+                         {"sigma_s", d.sigma_s},
+                         {"sigma_a", d.sigma_a},
+                         {"g", d.g},
+                         {"density_scale", d.density_scale}});
+    }
+    return {{"settings", group.to_json()},
+            {"media", media},
+            {"camera", {{"yaw", b.yaw}, {"pitch", b.pitch}, {"zoom", b.zoom}}},
+            {"probe_lobes", b.show_lobes}};
+}
+
+BakeSessionFile read_bake_session(const JsonReader& r, const Scene& scene) {
+    r.only_keys({"settings", "media", "camera", "probe_lobes"});
+    BakeSessionFile f;
+    SettingsGroup group;
+    group.bind(BakeSettings::schema(), &f.settings);
+    if (r.has("settings"))
+        group.from_json(r.get("settings").raw(), r.file(), r.path() + ".settings");
+    if (r.has("media")) {
+        const JsonReader media = r.get("media");
+        if (media.array_size() != scene.media.size())
+            media.fail("expected " + std::to_string(scene.media.size()) +
+                       " media (the scene's), in the scene's order");
+        for (size_t i = 0; i < scene.media.size(); ++i) {
+            const JsonReader m = media.at(i);
+            m.only_keys({"name", "sigma_s", "sigma_a", "g", "density_scale"});
+            const JsonReader name = m.get("name");
+            if (name.string() != scene.media[i].name)
+                name.fail("expected \"" + scene.media[i].name + "\", the scene's medium " +
+                          std::to_string(i));
+            // The scene format's ranges (medium_desc.cpp).
+            f.media.push_back({m.get("sigma_s").number_in(0.0, 1e6),
+                               m.get("sigma_a").number_in(0.0, 1e6),
+                               m.get("g").number_in(-1.0, 1.0, true, true),
+                               m.get("density_scale").number_in(0.0, 1e6)});
+        }
+    } else {
+        for (const MediumDesc& d : scene.media)
+            f.media.push_back({d.sigma_s, d.sigma_a, d.g, d.density_scale});
+    }
+    if (r.has("camera")) {
+        const JsonReader c = r.get("camera");
+        c.only_keys({"yaw", "pitch", "zoom"});
+        f.yaw = float(c.get("yaw").number_in(-180.0, 180.0));
+        f.pitch = float(c.get("pitch").number_in(-60.0, 60.0));
+        f.zoom = float(c.get("zoom").number_in(0.3, 4.0));
+    }
+    if (r.has("probe_lobes")) f.show_lobes = r.get("probe_lobes").boolean();
+    return f;
+}
+
+void apply_bake_session(Workbench::State& s, const BakeSessionFile& f) {
+    BakeSession& b = *s.bake;
+    s.reference_job.reset();  // the jobs read the settings and media: stop them first
+    b.job.reset();
+    b.settings = f.settings;
+    for (size_t i = 0; i < f.media.size() && i < b.media->size(); ++i)
+        b.media->set_coefficients(i, f.media[i].sigma_s, f.media[i].sigma_a, f.media[i].g,
+                                  f.media[i].density_scale);
+    b.yaw = f.yaw, b.pitch = f.pitch, b.zoom = f.zoom;
+    b.show_lobes = f.show_lobes;
+    b.baker_dirty = true;
+}
+
 }  // namespace freqlab::ui

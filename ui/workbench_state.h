@@ -16,6 +16,7 @@
 #include "image/metrics.h"
 #include "layer_view.h"
 #include "render/frame_renderer.h"
+#include "scene/json_reader.h"
 #include "scene/scene.h"
 #include "tables_panel.h"
 #include "volume/lightmap_baker.h"
@@ -100,6 +101,26 @@ void draw_bake_panel(Workbench::State& s);
 std::vector<std::string> bake_trace(Workbench::State& s, int x, int y);
 // Probes' SH lobes over the viewport image (call inside the viewport window).
 void draw_probe_lobes(Workbench::State& s);
+// A bake's part of a session file: method, bake settings, every medium's coefficients (by
+// the scene's order and name), the preview camera and the lobes toggle.
+struct BakeSessionFile {
+    BakeSettings settings;
+    struct Coefficients {
+        double sigma_s, sigma_a, g, density_scale;
+    };
+    std::vector<Coefficients> media;
+    float yaw = 0.0f, pitch = 0.0f, zoom = 1.0f;
+    bool show_lobes = true;
+};
+BakeMethod bake_method(const Workbench::State& s);  // needs s.bake
+// A bake.* assignment (Workbench::apply_setting): the bake restarts with it.
+void apply_bake_setting(Workbench::State& s, const std::string& assignment);
+nlohmann::json bake_session_to_json(const Workbench::State& s);
+// Reads and checks all of `r` against `scene`'s media (names, count, the scene format's
+// ranges) before anything changes; throws Error naming file and field.
+BakeSessionFile read_bake_session(const JsonReader& r, const Scene& scene);
+// Stops the bake, takes the file's state and restarts it (needs s.bake).
+void apply_bake_session(Workbench::State& s, const BakeSessionFile& f);
 // Compare for a bake: VPT at 4 x bake.spp, its preview as the frame's reference.
 void start_bake_reference(Workbench::State& s);
 // Adds reference, error, relative_error to results[frame] and measures (results_mutex held).

@@ -3,15 +3,18 @@
 // figures with insets, stats CSV) and sessions (save / load as JSON).
 #include <imgui.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include "base/error.h"
 #include "base/file_io.h"
 #include "image/image_io.h"
 #include "scene/json_reader.h"
+#include "scene/scene_loader.h"
 #include "workbench_state.h"
 
 namespace freqlab::ui {
@@ -231,20 +234,23 @@ json session_to_json(const Workbench::State& s) {
     RenderConfig config = s.config;
     json insets = json::array();
     for (const FigureInset& in : s.insets) insets.push_back({in.x, in.y, in.width, in.height});
-    return {{"freqlab_session", 1},
-            {"scene", s.options.scene},
-            {"method", render_method_names()[size_t(s.config.method)]},
-            {"frame", s.frame},
-            {"layer", s.layer_name},
-            {"overlay_on_color", s.overlay_on_color},
-            {"overlay_opacity", s.overlay_opacity},
-            {"fixed_range", s.fixed_range},
-            {"range", {s.range.lo, s.range.hi}},
-            {"zoom", s.zoom},
-            {"centre", {s.centre.x, s.centre.y}},
-            {"inspect", {s.pick_x, s.pick_y}},
-            {"insets", insets},
-            {"settings", config.settings_group().to_json()}};
+    json session = {{"freqlab_session", 1},
+                    {"scene", s.options.scene},
+                    {"method", s.bake ? std::string(to_string(bake_method(s)))
+                                      : render_method_names()[size_t(s.config.method)]},
+                    {"frame", s.frame},
+                    {"layer", s.layer_name},
+                    {"overlay_on_color", s.overlay_on_color},
+                    {"overlay_opacity", s.overlay_opacity},
+                    {"fixed_range", s.fixed_range},
+                    {"range", {s.range.lo, s.range.hi}},
+                    {"zoom", s.zoom},
+                    {"centre", {s.centre.x, s.centre.y}},
+                    {"inspect", {s.pick_x, s.pick_y}},
+                    {"insets", insets},
+                    {"settings", config.settings_group().to_json()}};
+    if (s.bake) session["bake"] = bake_session_to_json(s);
+    return session;
 }
 
 void draw_session_menu(Workbench& wb, Workbench::State& s) {
@@ -275,21 +281,33 @@ void Workbench::load_session(const std::string& path) {
     const JsonReader r(doc, path, "");
     r.only_keys({"freqlab_session", "scene", "method", "frame", "layer", "overlay_on_color",
                  "overlay_opacity", "fixed_range", "range", "zoom", "centre", "inspect", "insets",
-                 "settings"});
+                 "settings", "bake"});
     if (r.get("freqlab_session").integer_in(1, 1) != 1) r.fail("unsupported session version");
     WorkbenchOptions o = s_->options;
     o.scene = r.get("scene").string();
-    o.method = r.get("method").one_of({"gbuffer", "mis", "reference", "points", "sparse"});
+    const JsonReader method = r.get("method");
+    o.method = method.string();
+    const std::vector<std::string>& render_methods = render_method_names();
+    const bool bake = is_bake_method(o.method);
+    if (!bake &&
+        std::find(render_methods.begin(), render_methods.end(), o.method) == render_methods.end()) {
+        std::string list;
+        for (const std::string& m : render_methods) list += m + ", ";
+        method.fail("expected one of " + list + "surface, extinction, impulse, vpt");
+    }
     o.frame = r.get("frame").integer_in(0, 1 << 30);
     o.layer = r.get("layer").string();
     o.settings.clear();
     // Validate the settings before anything changes: a bad file leaves the session as it was.
     RenderConfig probe;
     probe.settings_group().from_json(r.get("settings").raw(), path, "settings");
+    std::optional<BakeSessionFile> bake_file;
+    if (bake && r.has("bake")) bake_file = read_bake_session(r.get("bake"), load_scene(o.scene));
     reset(o);
     State& s = *s_;
     s.config.settings_group().from_json(r.get("settings").raw(), path, "settings");
-    s.config.method = parse_render_method(o.method);
+    if (!bake) s.config.method = parse_render_method(o.method);
+    if (bake_file && s.bake) apply_bake_session(s, *bake_file);
     restart_renderer(s);
     s.overlay_on_color = r.get("overlay_on_color").boolean();
     s.overlay_opacity = float(r.get("overlay_opacity").number_in(0, 1));

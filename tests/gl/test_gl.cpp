@@ -6,6 +6,7 @@
 #include <imgui_impl_opengl3.h>
 
 #include <OpenImageIO/imageio.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdlib>
@@ -326,4 +327,101 @@ TEST(GlWorkbench, BakePreviewShowsTheAnalyticIrradiance) {
         EXPECT_NEAR(e.at(160, x, y, 0), 3.14159f, 0.05f * 3.14159f) << x << "," << y;
     }
     EXPECT_EQ(texel.at(160, 80, 40, 2), -1.0f);
+}
+
+namespace {
+
+nlohmann::json read_json(const fs::path& p) {
+    std::ifstream in(p);
+    return nlohmann::json::parse(in);
+}
+
+void write_json(const fs::path& p, const nlohmann::json& j) {
+    std::ofstream(p) << j.dump(2);
+}
+
+LayerSet shown_layers(GlSession& gl, Workbench& wb) {
+    run_until_shown(gl, wb);
+    EXPECT_NE(wb.layers(), nullptr);
+    return wb.layers() ? *wb.layers() : LayerSet(0, 0);
+}
+
+}  // namespace
+
+// A bake's session keeps its method, bake settings and media coefficients: loading a session
+// whose fog has sigma_s 1.4 bakes exactly what a scene file with that fog bakes, a bad
+// coefficient names its field and changes nothing, and every render method's session loads.
+TEST(GlWorkbench, BakeSessionKeepsMethodSettingsAndMedia) {
+    const fs::path dir = fs::temp_directory_path() / "freqlab_bake_session";
+    fs::create_directories(dir);
+    const std::string cornell = std::string(FREQLAB_SOURCE_DIR) + "/scenes/cornell_fog.json";
+    GlSession gl;
+    WorkbenchOptions o;
+    o.scene = cornell;
+    o.method = "extinction";
+    o.layer = "lm_irradiance";
+    o.settings = {"frame.width=96", "frame.height=72", "bake.spp=4", "bake.texel_density=4",
+                  "bake.probes_x=0"};
+    {
+        Workbench wb(o);
+        run_until_shown(gl, wb);
+        wb.save_session((dir / "saved.json").string());
+    }
+    nlohmann::json session = read_json(dir / "saved.json");
+    EXPECT_EQ(session["method"], "extinction");
+    EXPECT_EQ(session["bake"]["settings"]["bake"]["spp"], 4);
+    ASSERT_EQ(session["bake"]["media"].size(), 1u);
+    EXPECT_EQ(session["bake"]["media"][0]["name"], "fog");
+    EXPECT_DOUBLE_EQ(session["bake"]["media"][0]["sigma_s"].get<double>(), 0.35);
+    session["bake"]["media"][0]["sigma_s"] = 1.4;
+    write_json(dir / "thick.json", session);
+
+    Workbench loaded(WorkbenchOptions{});
+    loaded.load_session((dir / "thick.json").string());
+    const LayerSet from_session = shown_layers(gl, loaded);
+    loaded.save_session((dir / "again.json").string());
+    EXPECT_EQ(read_json(dir / "again.json")["bake"], session["bake"]);
+
+    nlohmann::json scene = read_json(cornell);
+    scene["media"][0]["sigma_s"] = 1.4;
+    write_json(dir / "cornell_thick.json", scene);
+    o.scene = (dir / "cornell_thick.json").string();
+    Workbench direct(o);
+    const LayerSet from_scene = shown_layers(gl, direct);
+    const Layer& a = from_session.get("lm_irradiance");
+    const Layer& b = from_scene.get("lm_irradiance");
+    ASSERT_EQ(a.data.size(), b.data.size());
+    EXPECT_EQ(a.data, b.data);
+    // The default fog would give other values: the coefficients did reach the bake.
+    Workbench thin(WorkbenchOptions{});
+    thin.load_session((dir / "saved.json").string());
+    EXPECT_NE(shown_layers(gl, thin).get("lm_irradiance").data, a.data);
+
+    session["bake"]["media"][0]["g"] = 1.0;
+    write_json(dir / "bad.json", session);
+    try {
+        loaded.load_session((dir / "bad.json").string());
+        FAIL() << "g = 1 was accepted";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.field(), "bake.media[0].g");
+    }
+    loaded.save_session((dir / "after_bad.json").string());
+    EXPECT_EQ(read_json(dir / "after_bad.json")["bake"]["media"][0]["sigma_s"], 1.4);
+    // bake.* settings reach a bake workbench's bake.
+    loaded.apply_setting("bake.spp=8");
+    run_until_shown(gl, loaded);
+    loaded.save_session((dir / "after_set.json").string());
+    EXPECT_EQ(read_json(dir / "after_set.json")["bake"]["settings"]["bake"]["spp"], 8);
+
+    for (const char* method : {"gbuffer", "mis", "reference", "points", "sparse", "cache"}) {
+        nlohmann::json s = read_json(dir / "saved.json");
+        s.erase("bake");
+        s["scene"] = "builtin:default";
+        s["method"] = method;
+        s["layer"] = "color";
+        write_json(dir / "render.json", s);
+        Workbench wb(WorkbenchOptions{});
+        EXPECT_NO_THROW(wb.load_session((dir / "render.json").string())) << method;
+        EXPECT_EQ(read_json(dir / "render.json")["method"], method);
+    }
 }
