@@ -215,6 +215,7 @@ void Workbench::reset(const WorkbenchOptions& options) {
     s.metrics.clear();
     s.shown = nullptr;
     s.options = options;
+    s.scene_path = options.scene;
     s.config = RenderConfig{};
     s.layer_name = options.layer.empty() ? "color" : options.layer;
     if (!options.show_timings) s.stat_index = 1;  // rays: the same on every host
@@ -251,6 +252,12 @@ void Workbench::reset(const WorkbenchOptions& options) {
     }
 }
 
+void Workbench::open_scene(const std::string& path) {
+    WorkbenchOptions o = s_->options;
+    o.scene = path;
+    reset(o);
+}
+
 Workbench::~Workbench() {
     s_->bake.reset();
     s_->job.reset();
@@ -276,6 +283,8 @@ void Workbench::draw(int fb_w, int fb_h) {
     if (ImGui::BeginMainMenuBar()) {
         draw_session_menu(*this, s);
         draw_export_menu(s);
+        draw_view_menu(s);
+        draw_help_menu();
         ImGui::EndMainMenuBar();
     }
     poll_reference(s);

@@ -78,6 +78,8 @@ class Workbench {
     void save_session(const std::string& path) const;
     void load_session(const std::string& path);   // throws Error naming file and field
     void reset(const WorkbenchOptions& options);  // reloads the scene; errors show in the UI
+    // Another scene, same method and settings (File > Open scene); errors show in the UI.
+    void open_scene(const std::string& path);
 
     // Compare: render the reference of the shown frame in the background; when it arrives the
     // frame gains layers reference, error, relative_error and metrics() answers.

@@ -86,7 +86,8 @@ struct Workbench::State {
     std::unique_ptr<Job> env_bandwidth_job;
     std::unique_ptr<FrameResult> env_bandwidth;  // guarded by results_mutex
     std::string session_path = "freqlab-out/session.json";
-    BakeSessionPtr bake;  // set when the method is a bake method (surface ... vpt)
+    std::string scene_path;  // File > Open scene's field (the scene's file at start)
+    BakeSessionPtr bake;     // set when the method is a bake method (surface ... vpt)
 };
 
 bool is_bake_method(const std::string& name);
@@ -141,6 +142,9 @@ void draw_cache_panel(Workbench::State& s);
 void draw_inspector(Workbench& wb, Workbench::State& s);
 void draw_export_menu(Workbench::State& s);
 void draw_session_menu(Workbench& wb, Workbench::State& s);
+// View and Help menus: the viewport's toggles, the shortcuts.
+void draw_view_menu(Workbench::State& s);
+void draw_help_menu();
 nlohmann::json session_to_json(const Workbench::State& s);
 
 }  // namespace freqlab::ui

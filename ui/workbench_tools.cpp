@@ -256,6 +256,18 @@ json session_to_json(const Workbench::State& s) {
 void draw_session_menu(Workbench& wb, Workbench::State& s) {
     if (!ImGui::BeginMenu("File")) return;
     char path[512];
+    std::snprintf(path, sizeof path, "%s", s.scene_path.c_str());
+    if (ImGui::InputText("scene file", path, sizeof path)) s.scene_path = path;
+    if (ImGui::MenuItem("Open scene")) {
+        wb.open_scene(s.scene_path);  // a bad file shows its error in the UI
+        ImGui::EndMenu();
+        return;
+    }
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip(
+            "a scene JSON (scenes/README.md) or builtin:default; the method and "
+            "settings stay");
+    ImGui::Separator();
     std::snprintf(path, sizeof path, "%s", s.session_path.c_str());
     if (ImGui::InputText("session file", path, sizeof path)) s.session_path = path;
     try {
@@ -329,6 +341,33 @@ void Workbench::load_session(const std::string& path) {
     }
     s.session_path = path;
     s.view_dirty = true;
+}
+
+void draw_view_menu(Workbench::State& s) {
+    if (!ImGui::BeginMenu("View")) return;
+    if (ImGui::MenuItem("Fit image", "F")) s.zoom = 1.0f, s.centre = ImVec2(0.5f, 0.5f);
+    if (ImGui::MenuItem("Overlay over colour", nullptr, &s.overlay_on_color)) s.view_dirty = true;
+    if (ImGui::MenuItem("Fixed range", nullptr, &s.fixed_range)) s.view_dirty = true;
+    ImGui::MenuItem("Split view against the reference", nullptr, &s.split);
+    if (!s.bake) {
+        if (ImGui::MenuItem("Environment bandwidth", nullptr, &s.show_env_bandwidth))
+            s.view_dirty = true;
+    }
+    ImGui::EndMenu();
+}
+
+void draw_help_menu() {
+    if (!ImGui::BeginMenu("Help")) return;
+    ImGui::TextUnformatted("Space        play / pause the timeline");
+    ImGui::TextUnformatted("Left, Right  previous / next frame");
+    ImGui::TextUnformatted("F            fit the image to the viewport");
+    ImGui::TextUnformatted("Wheel        zoom at the cursor");
+    ImGui::TextUnformatted("Right-drag   pan");
+    ImGui::TextUnformatted("Click        inspect a pixel (every layer, the pixel's trace)");
+    ImGui::Separator();
+    ImGui::TextUnformatted("Settings: hover a control for its tooltip; the same keys work as");
+    ImGui::TextUnformatted("--set prefix.key=value on the command line (README.md).");
+    ImGui::EndMenu();
 }
 
 }  // namespace freqlab::ui

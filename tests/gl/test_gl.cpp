@@ -425,3 +425,20 @@ TEST(GlWorkbench, BakeSessionKeepsMethodSettingsAndMedia) {
         EXPECT_EQ(read_json(dir / "render.json")["method"], method);
     }
 }
+
+// File > Open scene: a missing file is an error naming it, shown in the UI; a good one renders
+// with the method and settings kept.
+TEST(GlWorkbench, OpenSceneKeepsMethodAndSettings) {
+    GlSession gl;
+    Workbench wb(small_scene("depth"));
+    run_until_shown(gl, wb);
+    wb.open_scene("no_such_scene.json");
+    render_ui_frame(*gl.host, wb);
+    EXPECT_NE(wb.error().find("no_such_scene.json"), std::string::npos) << wb.error();
+    wb.open_scene(std::string(FREQLAB_SOURCE_DIR) + "/scenes/analytic/sphere_on_plane.json");
+    run_until_shown(gl, wb);
+    EXPECT_TRUE(wb.error().empty()) << wb.error();
+    ASSERT_NE(wb.layers(), nullptr);
+    EXPECT_EQ(wb.layers()->width(), 160);  // frame.width=160 of small_scene stayed
+    EXPECT_NE(wb.layers()->find("depth"), nullptr);
+}
