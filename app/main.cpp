@@ -151,7 +151,9 @@ int main(int argc, char** argv) {
     bake->add_flag("--quiet", bk.quiet, "no progress bar");
     bake->add_option("--out", bk.out, "output directory")->required();
     freqlab::BenchArgs ba;
-    auto* bench = app.add_subcommand("bench", "rays-vs-error studies of method A against MIS");
+    auto* bench = app.add_subcommand("bench",
+                                     "time-vs-error studies: method A against MIS (points, sparse, "
+                                     "cache), method B's baker (bake)");
     bench->add_option("scene", ba.scene, "scene file");
     bench->add_option(
         "--study", ba.study,
