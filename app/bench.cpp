@@ -54,9 +54,11 @@ double percentile(std::vector<double> v, double q) {
 int run_bench(const BenchArgs& a) {
     if (a.study == "cache" || a.study == "cache-ablation") return run_bench_cache(a);
     if (a.study == "bake") return run_bench_bake(a);
+    if (a.study == "bake-thickness") return run_bench_bake_thickness(a);
     if (a.study == "sparse") return run_bench_sparse(a);
     if (a.study != "points")
-        throw Error("--study", a.study, "expected points, sparse, cache, cache-ablation or bake");
+        throw Error("--study", a.study,
+                    "expected points, sparse, cache, cache-ablation, bake or bake-thickness");
     if (a.runs < 1) throw Error("--runs", std::to_string(a.runs), "expected at least 1");
     if (a.out.empty()) throw Error("--out", "", "expected an output directory");
     const Scene scene = load_scene(a.scene);

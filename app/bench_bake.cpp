@@ -12,6 +12,12 @@
 //     progressive preview) and the whole re-bake timed, tables untouched.
 // Writes bench_bake.json, bench_bake.csv (every pass of every curve) and
 // bench_bake_time_error.png.
+//
+// `--study bake-thickness`: where the tables stop describing the scene. Every medium's density
+// scale times 1/4 ... 8; at each, a VPT reference, impulse and extinction at --max-spp, their
+// lm_irradiance relMSE and the ratio of impulse's multiple scattering to VPT's (mean over
+// valid texels), against the optical thickness across the scene's bounds (the least of the
+// three axes through its centre). Writes bench_bake_thickness.json / .csv / .png.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -63,6 +69,35 @@ std::vector<CurvePoint> curve(LightmapBaker& baker, const LightmapBaker& referen
                      baker.samples(), baker.stats().bake_ms, points.back().relmse);
     }
     return points;
+}
+
+// Sum over the valid texels of all lightmaps of a layer's luminance.
+double layer_sum(const LightmapBaker& baker, const char* layer) {
+    double sum = 0.0;
+    for (size_t i = 0; i < baker.lightmaps().size(); ++i) {
+        const LayerSet set = baker.layers(i);
+        const Layer& l = set.get(layer);
+        const Layer& valid = set.get("texel_valid");
+        for (size_t t = 0; t < valid.data.size(); ++t)
+            if (valid.data[t] > 0.5f)
+                sum += luminance(vec3(l.data[3 * t], l.data[3 * t + 1], l.data[3 * t + 2]));
+    }
+    return sum;
+}
+
+// Optical thickness (extinction) across the scene: the least over the three axes of the
+// segment through the centre of its bounds.
+double thickness_across(const Media& media, const RayScene& rays) {
+    const vec3 lo = rays.bounds_min(), hi = rays.bounds_max(), centre = 0.5f * (lo + hi);
+    double least = INFINITY;
+    for (int a = 0; a < 3; ++a) {
+        vec3 o = centre, d(0.0f);
+        o[a] = lo[a];
+        d[a] = 1.0f;
+        const SegmentOptics s = media.integrate(o, d, double(hi[a] - lo[a]));
+        if (hi[a] > lo[a]) least = std::min(least, s.tau_s + s.tau_a);
+    }
+    return std::isfinite(least) ? least : 0.0;
 }
 
 // Time at which a curve first reaches `target` error: log-log interpolation between passes;
@@ -230,6 +265,89 @@ int run_bench_bake(const BenchArgs& a) {
                    series("extinction", {0.5f, 0.5f, 0.5f}, c_extinction),
                    series("vpt", {0.3f, 0.6f, 1.0f}, c_vpt)};
     if (curves) write_line_plot(fs::path(a.out) / "bench_bake_time_error.png", plot);
+    std::printf("%s\n", report.dump(2).c_str());
+    return 0;
+}
+
+int run_bench_bake_thickness(const BenchArgs& a) {
+    if (a.out.empty()) throw Error("--out", "", "expected an output directory");
+    BakeSettings settings;
+    SettingsGroup group;
+    group.bind(BakeSettings::schema(), &settings);
+    for (const std::string& s : a.sets) group.apply_assignment(s);
+    const Scene scene = load_scene(a.scene);
+    Media media(scene.media, scene.source);
+    if (media.empty())
+        throw Error(a.scene, "media", "the bake-thickness study needs a scene with media");
+    EmbreeDevice device(0);
+    RayScene rays(scene, device);
+    rays.update(0.0f);
+    const ImpulseTables tables = ImpulseTables::cached(kDefaultTableBounces);
+    fs::create_directories(a.out);
+    std::vector<MediumDesc> original;
+    for (size_t i = 0; i < media.size(); ++i) original.push_back(media.desc(i));
+    BakeSettings ref_settings = settings;
+    ref_settings.seed = settings.seed + 7919;
+
+    json rows = json::array();
+    std::string csv =
+        "density_factor,tau_across,impulse_relmse,extinction_relmse,"
+        "multiple_impulse_over_vpt,reference_ms,impulse_ms\n";
+    PlotSeries s_impulse{"impulse", {1.0f, 0.6f, 0.2f}, {}, {}};
+    PlotSeries s_extinction{"extinction", {0.5f, 0.5f, 0.5f}, {}, {}};
+    for (double factor : {0.25, 0.5, 1.0, 2.0, 4.0, 8.0}) {
+        for (size_t i = 0; i < media.size(); ++i) {
+            const MediumDesc& d = original[i];
+            media.set_coefficients(i, d.sigma_s, d.sigma_a, d.g, d.density_scale * factor);
+        }
+        const double tau = thickness_across(media, rays);
+        LightmapBaker reference(rays, media, nullptr, BakeMethod::Vpt, ref_settings);
+        reference.run_pass(a.reference_spp);
+        LightmapBaker impulse(rays, media, &tables, BakeMethod::Impulse, settings);
+        impulse.run_pass(a.max_spp);
+        LightmapBaker extinction(rays, media, nullptr, BakeMethod::Extinction, settings);
+        extinction.run_pass(a.max_spp);
+        const double e_impulse = relmse_against(impulse, reference);
+        const double e_extinction = relmse_against(extinction, reference);
+        const double m_ref = layer_sum(reference, "lm_inscatter_multiple");
+        const double m_ratio =
+            m_ref > 0.0 ? layer_sum(impulse, "lm_inscatter_multiple") / m_ref : NAN;
+        std::fprintf(stderr,
+                     "  density x %-5g tau across %7.3f: relMSE impulse %.4f extinction %.4f, "
+                     "multiple impulse / vpt %.3f\n",
+                     factor, tau, e_impulse, e_extinction, m_ratio);
+        rows.push_back({{"density_factor", factor},
+                        {"tau_across", tau},
+                        {"impulse_relmse", e_impulse},
+                        {"extinction_relmse", e_extinction},
+                        {"multiple_impulse_over_vpt", m_ratio},
+                        {"reference_ms", reference.stats().bake_ms},
+                        {"impulse_ms", impulse.stats().bake_ms}});
+        csv += std::to_string(factor) + "," + std::to_string(tau) + "," +
+               std::to_string(e_impulse) + "," + std::to_string(e_extinction) + "," +
+               std::to_string(m_ratio) + "," + std::to_string(reference.stats().bake_ms) + "," +
+               std::to_string(impulse.stats().bake_ms) + "\n";
+        if (tau > 0.0 && e_impulse > 0.0 && e_extinction > 0.0) {
+            s_impulse.x.push_back(tau), s_impulse.y.push_back(e_impulse);
+            s_extinction.x.push_back(tau), s_extinction.y.push_back(e_extinction);
+        }
+    }
+    const json report = {{"scene", a.scene},
+                         {"settings", group.to_json()},
+                         {"reference", {{"method", "vpt"}, {"spp", a.reference_spp}}},
+                         {"spp", a.max_spp},
+                         {"sweep", rows}};
+    write_text_atomically(fs::path(a.out) / "bench_bake_thickness.json", report.dump(2) + "\n");
+    write_text_atomically(fs::path(a.out) / "bench_bake_thickness.csv", csv);
+    if (s_impulse.x.size() >= 2) {
+        LinePlot plot;
+        plot.title = "bake " + fs::path(a.scene).stem().string() + ": relMSE vs optical thickness";
+        plot.x_label = "optical thickness across the scene (log)";
+        plot.y_label = "relMSE (log)";
+        plot.log_x = plot.log_y = true;
+        plot.series = {s_impulse, s_extinction};
+        write_line_plot(fs::path(a.out) / "bench_bake_thickness.png", plot);
+    }
     std::printf("%s\n", report.dump(2).c_str());
     return 0;
 }

@@ -59,10 +59,11 @@ struct BakeArgs {
     bool quiet = false;
     std::string out;
 };
-int run_bake(const BakeArgs& args);           // bake.cpp
-int run_bench_cache(const BenchArgs& args);   // studies cache, cache-ablation (bench_cache.cpp)
-int run_bench_bake(const BenchArgs& args);    // study bake (bench_bake.cpp)
-int run_bench_sparse(const BenchArgs& args);  // study sparse (bench_sparse.cpp)
+int run_bake(const BakeArgs& args);          // bake.cpp
+int run_bench_cache(const BenchArgs& args);  // studies cache, cache-ablation (bench_cache.cpp)
+int run_bench_bake(const BenchArgs& args);   // study bake (bench_bake.cpp)
+int run_bench_bake_thickness(const BenchArgs& args);  // study bake-thickness (bench_bake.cpp)
+int run_bench_sparse(const BenchArgs& args);          // study sparse (bench_sparse.cpp)
 
 struct FigureArgs {
     std::string input;  // an EXR written by freqlab (or any EXR)

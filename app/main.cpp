@@ -159,7 +159,8 @@ int main(int argc, char** argv) {
         "--study", ba.study,
         "points: adaptive radiance points vs fixed-N MIS; sparse: sparse vs points and "
         "equal-time MIS on one frame (time, rays, RMSE); cache: the cache vs sparse and "
-        "equal-time MIS over frames; cache-ablation: temporal test on/off; bake: method B");
+        "equal-time MIS over frames; cache-ablation: temporal test on/off; bake: method B; "
+        "bake-thickness: method B's error against VPT as the media thicken");
     bench->add_option("--frames", ba.frames, "cache studies: A:B (default: all frames)");
     bench->add_option("--error-every", ba.error_every,
                       "cache studies: RMSE against the reference every k-th frame");

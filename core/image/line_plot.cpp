@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "base/error.h"
 #include "image/image_io.h"
@@ -22,6 +23,26 @@ double nice_step(double lo, double hi, int count) {
     for (double m : {1.0, 2.0, 5.0, 10.0})
         if (m * p >= raw) return m * p;
     return 10.0 * p;
+}
+
+// Tick positions on an axis spanning [lo, hi] (log10 units on a log axis): whole decades,
+// and 2 x and 5 x each decade as well when fewer than three decades are spanned.
+std::vector<double> ticks(double lo, double hi, bool log, int count) {
+    std::vector<double> out;
+    if (!log) {
+        const double step = nice_step(lo, hi, count);
+        for (double v = std::ceil(lo / step) * step; v <= hi + 1e-9 * step; v += step)
+            out.push_back(v);
+        return out;
+    }
+    const bool minor = hi - lo < 3.0;
+    for (double d = std::floor(lo); d <= hi + 1e-9; d += 1.0)
+        for (double m : {1.0, 2.0, 5.0}) {
+            if (m > 1.0 && !minor) continue;
+            const double v = d + std::log10(m);
+            if (v >= lo - 1e-9 && v <= hi + 1e-9) out.push_back(v);
+        }
+    return out;
 }
 
 std::string tick_label(double v) {
@@ -69,16 +90,11 @@ void write_line_plot(const std::filesystem::path& path, const LinePlot& plot) {
                         "cannot render text with this font (" + buf.geterror() +
                             "); expected a TrueType file");
     };
-    // Log axes tick whole decades only (1, 10, 100, ...).
-    const double xs =
-        plot.log_x ? std::max(1.0, std::round(nice_step(x0, x1, 8))) : nice_step(x0, x1, 8);
-    const double ys =
-        plot.log_y ? std::max(1.0, std::round(nice_step(y0, y1, 6))) : nice_step(y0, y1, 6);
-    for (double x = std::ceil(x0 / xs) * xs; x <= x1 + 1e-9 * xs; x += xs) {
+    for (double x : ticks(x0, x1, plot.log_x, 8)) {
         ImageBufAlgo::render_line(buf, px(x), top, px(x), H - bottom, grid);
         text(px(x) - 10, H - bottom + 20, tick_label(plot.log_x ? std::pow(10.0, x) : x), 14, axis);
     }
-    for (double y = std::ceil(y0 / ys) * ys; y <= y1 + 1e-9 * ys; y += ys) {
+    for (double y : ticks(y0, y1, plot.log_y, 6)) {
         ImageBufAlgo::render_line(buf, left, py(y), W - right, py(y), grid);
         text(8, py(y) + 5, tick_label(plot.log_y ? std::pow(10.0, y) : y), 14, axis);
     }
