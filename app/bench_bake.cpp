@@ -71,6 +71,30 @@ std::vector<CurvePoint> curve(LightmapBaker& baker, const LightmapBaker& referen
     return points;
 }
 
+// What both bake studies start from: the bake settings with --set applied, the scene and its
+// media (an error without any), its rays at t = 0.
+struct BakeStudy {
+    BakeSettings settings;
+    SettingsGroup group;
+    Scene scene;
+    Media media;
+    EmbreeDevice device{0};
+    RayScene rays;
+    BakeStudy(const BenchArgs& a, const std::string& study)
+        : scene(checked_scene(a, study)), media(scene.media, scene.source), rays(scene, device) {
+        group.bind(BakeSettings::schema(), &settings);
+        for (const std::string& s : a.sets) group.apply_assignment(s);
+        rays.update(0.0f);
+    }
+    static Scene checked_scene(const BenchArgs& a, const std::string& study) {
+        if (a.out.empty()) throw Error("--out", "", "expected an output directory");
+        Scene s = load_scene(a.scene);
+        if (s.media.empty())
+            throw Error(a.scene, "media", "the " + study + " study needs a scene with media");
+        return s;
+    }
+};
+
 // Sum over the valid texels of all lightmaps of a layer's luminance.
 double layer_sum(const LightmapBaker& baker, const char* layer) {
     double sum = 0.0;
@@ -116,17 +140,12 @@ double time_to_reach(const std::vector<CurvePoint>& c, double target) {
 }  // namespace
 
 int run_bench_bake(const BenchArgs& a) {
-    if (a.out.empty()) throw Error("--out", "", "expected an output directory");
-    BakeSettings settings;
-    SettingsGroup group;
-    group.bind(BakeSettings::schema(), &settings);
-    for (const std::string& s : a.sets) group.apply_assignment(s);
-    const Scene scene = load_scene(a.scene);
-    Media media(scene.media, scene.source);
-    if (media.empty()) throw Error(a.scene, "media", "the bake study needs a scene with media");
-    EmbreeDevice device(0);
-    RayScene rays(scene, device);
-    rays.update(0.0f);
+    BakeStudy study(a, "bake");
+    const Scene& scene = study.scene;
+    const BakeSettings& settings = study.settings;
+    const SettingsGroup& group = study.group;
+    Media& media = study.media;
+    const RayScene& rays = study.rays;
     const auto t_tables = Clock::now();
     const ImpulseTables tables = ImpulseTables::cached(kDefaultTableBounces);
     const double tables_ms = ms_since(t_tables);
@@ -270,18 +289,11 @@ int run_bench_bake(const BenchArgs& a) {
 }
 
 int run_bench_bake_thickness(const BenchArgs& a) {
-    if (a.out.empty()) throw Error("--out", "", "expected an output directory");
-    BakeSettings settings;
-    SettingsGroup group;
-    group.bind(BakeSettings::schema(), &settings);
-    for (const std::string& s : a.sets) group.apply_assignment(s);
-    const Scene scene = load_scene(a.scene);
-    Media media(scene.media, scene.source);
-    if (media.empty())
-        throw Error(a.scene, "media", "the bake-thickness study needs a scene with media");
-    EmbreeDevice device(0);
-    RayScene rays(scene, device);
-    rays.update(0.0f);
+    BakeStudy study(a, "bake-thickness");
+    const BakeSettings& settings = study.settings;
+    const SettingsGroup& group = study.group;
+    Media& media = study.media;
+    const RayScene& rays = study.rays;
     const ImpulseTables tables = ImpulseTables::cached(kDefaultTableBounces);
     fs::create_directories(a.out);
     std::vector<MediumDesc> original;
