@@ -203,6 +203,10 @@ Workbench::Workbench(const WorkbenchOptions& options) : s_(std::make_unique<Stat
 }
 
 void Workbench::reset(const WorkbenchOptions& options) {
+    reset(options, nullptr);
+}
+
+void Workbench::reset(const WorkbenchOptions& options, Scene* loaded) {
     State& s = *s_;
     s.job.reset();
     s.reference_job.reset();
@@ -226,7 +230,7 @@ void Workbench::reset(const WorkbenchOptions& options) {
     s.pick_y = options.inspect_y;
     s.error.clear();
     try {
-        s.scene = load_scene(options.scene);
+        s.scene = loaded ? std::move(*loaded) : load_scene(options.scene);
         s.bake.reset();
         if (!s.device) s.device = std::make_unique<EmbreeDevice>(0);
         if (is_bake_method(options.method)) {

@@ -15,6 +15,10 @@
 #include "image/layers.h"
 #include "image/metrics.h"
 
+namespace freqlab {
+struct Scene;
+}
+
 namespace freqlab::ui {
 
 class GlHost;
@@ -92,6 +96,8 @@ class Workbench {
     struct State;  // defined in workbench.cpp; public so its helper functions can name it
 
   private:
+    // reset() with the scene already loaded from options.scene (moved from; null: load it).
+    void reset(const WorkbenchOptions& options, Scene* loaded);
     std::unique_ptr<State> s_;
 };
 

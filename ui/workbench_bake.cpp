@@ -126,6 +126,22 @@ void wait_for_bake(Workbench::State& s) {
     if (s.bake && s.bake->job) s.bake->job->wait();
 }
 
+void stop_bake_jobs(Workbench::State& s) {
+    s.reference_job.reset();
+    s.bake->job.reset();
+}
+
+void restart_bake(Workbench::State& s) {
+    // The comparison belongs to the media and settings it was baked with.
+    s.reference_job.reset();
+    {
+        std::lock_guard<std::mutex> lock(s.results_mutex);
+        s.references.clear();
+    }
+    s.metrics.clear();
+    start_bake(s);
+}
+
 void draw_bake_panel(Workbench::State& s) {
     BakeSession& b = *s.bake;
     if (b.job && b.job->done()) {
@@ -136,8 +152,7 @@ void draw_bake_panel(Workbench::State& s) {
     int method = int(b.method);
     if (ImGui::Combo("bake method", &method, "surface\0extinction\0impulse\0vpt\0") &&
         method != int(b.method)) {
-        s.reference_job.reset();
-        b.job.reset();
+        stop_bake_jobs(s);
         b.method = BakeMethod(method);
         b.baker_dirty = true;
         restart = true;
@@ -164,8 +179,7 @@ void draw_bake_panel(Workbench::State& s) {
             changed |= ImGui::SliderFloat("density scale", &scale, 0.0f, 10.0f, "%.2f",
                                           ImGuiSliderFlags_Logarithmic);
             if (changed) {
-                s.reference_job.reset();  // the jobs read the media: stop them first
-                b.job.reset();
+                stop_bake_jobs(s);  // the jobs read the media
                 b.media->set_coefficients(i, sigma_s, sigma_a, g, scale);
                 restart = true;
             }
@@ -196,8 +210,7 @@ void draw_bake_panel(Workbench::State& s) {
     SettingsGroup group;
     group.bind(BakeSettings::schema(), &edited);
     if (draw_settings(group, true) & kInvalidatesBake) {
-        s.reference_job.reset();
-        b.job.reset();
+        stop_bake_jobs(s);
         b.settings = edited;
         b.baker_dirty = true;  // the atlas and the estimator's settings live in the baker
         restart = true;
@@ -208,16 +221,7 @@ void draw_bake_panel(Workbench::State& s) {
                     st.texels_valid, st.bake_ms);
         if (b.first_pass_ms >= 0.0) ImGui::Text("first preview after %.0f ms", b.first_pass_ms);
     }
-    if (restart) {
-        // The comparison belongs to the media and settings it was baked with.
-        s.reference_job.reset();
-        {
-            std::lock_guard<std::mutex> lock(s.results_mutex);
-            s.references.clear();
-        }
-        s.metrics.clear();
-        start_bake(s);
-    }
+    if (restart) restart_bake(s);
 }
 
 void start_bake_reference(Workbench::State& s) {
@@ -327,11 +331,10 @@ void apply_bake_setting(Workbench::State& s, const std::string& assignment) {
     SettingsGroup group;
     group.bind(BakeSettings::schema(), &edited);
     group.apply_assignment(assignment, "workbench");
-    s.reference_job.reset();  // the jobs read b.settings: stop them before it changes
-    b.job.reset();
+    stop_bake_jobs(s);
     b.settings = edited;
     b.baker_dirty = true;
-    restart_renderer(s);
+    restart_bake(s);
 }
 
 nlohmann::json bake_session_to_json(const Workbench::State& s) {
@@ -379,9 +382,6 @@ BakeSessionFile read_bake_session(const JsonReader& r, const Scene& scene) {
                                m.get("g").number_in(-1.0, 1.0, true, true),
                                m.get("density_scale").number_in(0.0, 1e6)});
         }
-    } else {
-        for (const MediumDesc& d : scene.media)
-            f.media.push_back({d.sigma_s, d.sigma_a, d.g, d.density_scale});
     }
     if (r.has("camera")) {
         const JsonReader c = r.get("camera");
@@ -396,8 +396,7 @@ BakeSessionFile read_bake_session(const JsonReader& r, const Scene& scene) {
 
 void apply_bake_session(Workbench::State& s, const BakeSessionFile& f) {
     BakeSession& b = *s.bake;
-    s.reference_job.reset();  // the jobs read the settings and media: stop them first
-    b.job.reset();
+    stop_bake_jobs(s);
     b.settings = f.settings;
     for (size_t i = 0; i < f.media.size() && i < b.media->size(); ++i)
         b.media->set_coefficients(i, f.media[i].sigma_s, f.media[i].sigma_a, f.media[i].g,

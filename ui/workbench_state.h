@@ -97,6 +97,10 @@ void make_bake_session(Workbench::State& s, const std::string& method,
 void start_bake(Workbench::State& s);
 bool bake_busy(const Workbench::State& s);
 void wait_for_bake(Workbench::State& s);
+// The bake's jobs read its settings and media: stop them before either changes (needs s.bake).
+void stop_bake_jobs(Workbench::State& s);
+// Starts the bake again after a change, dropping the VPT comparison of what was baked before.
+void restart_bake(Workbench::State& s);
 void draw_bake_panel(Workbench::State& s);
 // The inspector's record of a pixel of the lightmapped preview: its texel's trace.
 std::vector<std::string> bake_trace(Workbench::State& s, int x, int y);
@@ -109,7 +113,7 @@ struct BakeSessionFile {
     struct Coefficients {
         double sigma_s, sigma_a, g, density_scale;
     };
-    std::vector<Coefficients> media;
+    std::vector<Coefficients> media;  // empty: the scene's own
     float yaw = 0.0f, pitch = 0.0f, zoom = 1.0f;
     bool show_lobes = true;
 };
@@ -120,7 +124,7 @@ nlohmann::json bake_session_to_json(const Workbench::State& s);
 // Reads and checks all of `r` against `scene`'s media (names, count, the scene format's
 // ranges) before anything changes; throws Error naming file and field.
 BakeSessionFile read_bake_session(const JsonReader& r, const Scene& scene);
-// Stops the bake, takes the file's state and restarts it (needs s.bake).
+// Stops the bake and takes the file's state (needs s.bake; the caller restarts it).
 void apply_bake_session(Workbench::State& s, const BakeSessionFile& f);
 // Compare for a bake: VPT at 4 x bake.spp, its preview as the frame's reference.
 void start_bake_reference(Workbench::State& s);

@@ -314,8 +314,12 @@ void Workbench::load_session(const std::string& path) {
     RenderConfig probe;
     probe.settings_group().from_json(r.get("settings").raw(), path, "settings");
     std::optional<BakeSessionFile> bake_file;
-    if (bake && r.has("bake")) bake_file = read_bake_session(r.get("bake"), load_scene(o.scene));
-    reset(o);
+    std::optional<Scene> scene;  // loaded once: checked against here, then reset() takes it
+    if (bake && r.has("bake")) {
+        scene = load_scene(o.scene);
+        bake_file = read_bake_session(r.get("bake"), *scene);
+    }
+    reset(o, scene ? &*scene : nullptr);
     State& s = *s_;
     s.config.settings_group().from_json(r.get("settings").raw(), path, "settings");
     if (!bake) s.config.method = parse_render_method(o.method);
