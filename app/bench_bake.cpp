@@ -95,17 +95,11 @@ struct BakeStudy {
     }
 };
 
-// Sum over the valid texels of all lightmaps of a layer's luminance.
+// A layer's luminance over the valid texels of all of a baker's lightmaps.
 double layer_sum(const LightmapBaker& baker, const char* layer) {
     double sum = 0.0;
-    for (size_t i = 0; i < baker.lightmaps().size(); ++i) {
-        const LayerSet set = baker.layers(i);
-        const Layer& l = set.get(layer);
-        const Layer& valid = set.get("texel_valid");
-        for (size_t t = 0; t < valid.data.size(); ++t)
-            if (valid.data[t] > 0.5f)
-                sum += luminance(vec3(l.data[3 * t], l.data[3 * t + 1], l.data[3 * t + 2]));
-    }
+    for (size_t i = 0; i < baker.lightmaps().size(); ++i)
+        sum += valid_texel_luminance_sum(baker.layers(i), layer);
     return sum;
 }
 
@@ -182,7 +176,7 @@ int run_bench_bake(const BenchArgs& a) {
                            {"relmse", p.relmse},
                            {"vpt_ms", t > 0 ? t : NAN},
                            {"vpt_over_impulse_time", r}});
-        if (r > 0 && !(r <= best_speedup)) best_speedup = r, best_spp = p.samples;
+        if (r > 0 && (best_spp == 0 || r > best_speedup)) best_speedup = r, best_spp = p.samples;
     }
 
     // Overhead at equal samples: surface, extinction and impulse interleaved, 5 runs each; the

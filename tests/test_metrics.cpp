@@ -6,6 +6,7 @@
 #include "base/error.h"
 #include "image/metrics.h"
 #include "math/rng.h"
+#include "volume/lightmap_baker.h"
 
 using namespace freqlab;
 
@@ -122,4 +123,25 @@ TEST(Colormap, KnownValues) {
     EXPECT_NEAR(viridis(1.0f).g, 0xe7 / 255.0f, 1e-6f);
     EXPECT_NEAR(diverging(0.0f).r, 0xf7 / 255.0f, 1e-6f);
     EXPECT_NEAR(categorical(11).r, categorical(1).r, 0.0f);  // the palette cycles
+}
+
+// Lightmap measures count valid texels only: not empty, inside-geometry or dilated ones.
+TEST(LightmapMeasures, OnlyValidTexelsCount) {
+    LayerSet lm(4, 1), ref(4, 1);
+    for (LayerSet* set : {&lm, &ref}) {
+        Layer& valid = set->add("texel_valid", LayerKind::Categorical, 1);
+        valid.data = {float(TexelState::Empty), float(TexelState::Valid),
+                      float(TexelState::InsideGeometry), float(TexelState::Dilated)};
+    }
+    Layer& a = lm.add("lm_irradiance", LayerKind::Color, 3);
+    Layer& b = ref.add("lm_irradiance", LayerKind::Color, 3);
+    for (int i = 0; i < 4; ++i)
+        for (int c = 0; c < 3; ++c) {
+            a.data[size_t(3 * i + c)] = float(i + 1);
+            b.data[size_t(3 * i + c)] = i == 1 ? 1.0f : 100.0f;
+        }
+    EXPECT_FLOAT_EQ(float(valid_texel_luminance_sum(lm, "lm_irradiance")), 2.0f);
+    const LightmapError e = compare_lightmaps(lm, ref, "lm_irradiance");
+    EXPECT_EQ(e.texels, 1);
+    EXPECT_NEAR(e.relmse, 1.0, 1e-5);  // (2 - 1)^2 / 1^2 at the one valid texel
 }

@@ -225,6 +225,17 @@ LayerSet LightmapBaker::layers(size_t mi) const {
 
 namespace freqlab {
 
+double valid_texel_luminance_sum(const LayerSet& lightmap, const std::string& layer) {
+    const Layer& l = lightmap.get(layer);
+    const Layer& valid = lightmap.get("texel_valid");
+    if (l.channels != 3) throw Error("", layer, "expected an RGB layer");
+    double sum = 0.0;
+    for (size_t i = 0; i < lightmap.pixel_count(); ++i)
+        if (int(valid.data[i]) == int(TexelState::Valid))
+            sum += luminance(vec3(l.data[3 * i], l.data[3 * i + 1], l.data[3 * i + 2]));
+    return sum;
+}
+
 LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref,
                                 const std::string& layer) {
     if (test.width() != ref.width() || test.height() != ref.height())

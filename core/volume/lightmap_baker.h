@@ -91,5 +91,8 @@ struct LightmapError {
 // Throws Error when sizes differ or a layer is missing.
 LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref,
                                 const std::string& layer);
+// The luminance of an RGB layer summed over the lightmap's valid texels (the texels
+// compare_lightmaps measures); throws Error when a layer is missing.
+double valid_texel_luminance_sum(const LayerSet& lightmap, const std::string& layer);
 
 }  // namespace freqlab
