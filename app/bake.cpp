@@ -18,6 +18,7 @@
 #include "volume/impulse_tables.h"
 #include "volume/lightmap_baker.h"
 #include "volume/lightmap_preview.h"
+#include "volume/shadowed_texels.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -26,7 +27,8 @@ namespace freqlab {
 
 namespace {
 
-json error_against(const fs::path& reference_dir, const std::string& name, const LayerSet& test) {
+json error_against(const fs::path& reference_dir, const std::string& name, const LayerSet& test,
+                   const std::vector<uint8_t>& shadowed) {
     const fs::path file = reference_dir / (name + ".exr");
     if (!fs::exists(file))
         throw Error(file.string(), "--reference", "no reference lightmap for '" + name + "'");
@@ -38,6 +40,15 @@ json error_against(const fs::path& reference_dir, const std::string& name, const
         const LightmapError e = compare_lightmaps(test, ref.layers, layer);
         out[layer] = {
             {"relmse", e.relmse}, {"rmse", e.rmse}, {"rel_l2", e.rel_l2}, {"texels", e.texels}};
+    }
+    if (ref.layers.find("lm_inscatter_single") && test.find("lm_inscatter_single")) {
+        const RegionComparison c = compare_region(test, ref.layers, shadowed);
+        out["shadowed"] = {{"texels", c.texels},
+                           {"lm_irradiance_relmse", c.irradiance_relmse},
+                           {"lm_irradiance_mean", c.test_irradiance},
+                           {"reference_lm_irradiance_mean", c.ref_irradiance},
+                           {"lm_irradiance_ratio", c.irradiance_ratio},
+                           {"inscatter_ratio", c.inscatter_ratio}};
     }
     return out;
 }
@@ -155,6 +166,7 @@ int run_bake(const BakeArgs& args) {
         report["overhead"] = stats.bake_ms / surface.stats().bake_ms;
     }
     json maps = json::array();
+    const BakeKeyLight key = bake_key_light(rays);
     for (size_t i = 0; i < baker.lightmaps().size(); ++i) {
         const ObjectLightmap& map = baker.lightmaps()[i];
         const std::string name = lightmap_name(scene, map);
@@ -176,7 +188,9 @@ int run_bake(const BakeArgs& args) {
                       {"texel_density", map.texel_density},
                       {"texels_valid", long(map.count(TexelState::Valid))},
                       {"texels_inside_geometry", long(map.count(TexelState::InsideGeometry))}};
-        if (!args.reference.empty()) entry["error"] = error_against(args.reference, name, layers);
+        if (!args.reference.empty())
+            entry["error"] =
+                error_against(args.reference, name, layers, shadowed_texels(rays, map, key));
         maps.push_back(entry);
     }
     report["lightmaps"] = maps;

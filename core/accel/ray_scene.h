@@ -47,6 +47,16 @@ struct Ray {
     float tfar = INFINITY;
 };
 
+// Where a ray leaving the surface point p (normal n, on the side the ray leaves) starts: p
+// moved off the surface by 2e-4 x max(1, |p|_inf), relative so that float rounding of the
+// hit position (~1e-7 |p|) never puts it back behind the surface. The bakers, VPT and the
+// shadow masks use it.
+inline vec3 spawn_point(const vec3& p, const vec3& n) {
+    const float scale =
+        std::max(1.0f, std::max(std::abs(p.x), std::max(std::abs(p.y), std::abs(p.z))));
+    return p + n * (2e-4f * scale);
+}
+
 class RayScene {
   public:
     RayScene(const Scene& scene, const EmbreeDevice& device);

@@ -2,6 +2,7 @@
 // sampling and MIS). Directions in a local Frame have z along the frame's normal.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 
 #include "math/types.h"
@@ -53,6 +54,57 @@ inline vec3 sample_power_cosine(float e, float u1, float u2) {
 }
 inline float power_cosine_pdf(float e, float cos_a) {
     return cos_a > 0 ? (e + 1.0f) / kTwoPi * std::pow(cos_a, e) : 0.0f;
+}
+
+// Henyey-Greenstein phase function of the cosine between the propagation directions before
+// and after a scattering event; integrates to 1 over the sphere (seed, Deuxieme article §4.5).
+inline double hg_phase(double g, double cos_theta) {
+    const double denom = 1.0 + g * g - 2.0 * g * cos_theta;
+    return (1.0 - g * g) / (4.0 * 3.14159265358979323846 * denom * std::sqrt(denom));
+}
+
+// A cosine distributed as hg_phase(g, cos) x 2 pi (the inverse of its CDF).
+inline float sample_hg_cos(float g, float u) {
+    if (std::abs(g) < 1e-3f) return 1.0f - 2.0f * u;
+    const float s = (1.0f - g * g) / (1.0f - g + 2.0f * g * u);
+    return std::clamp((1.0f + g * g - s * s) / (2.0f * g), -1.0f, 1.0f);
+}
+
+// Equiangular sampling of a distance t in [t0, t1] along a ray for a point at signed distance
+// `delta` along it (closest approach) and `h` > 0 from it: pdf(t) = h / ((b - a) r(t)^2),
+// proportional to 1 / r^2 (Kulla & Fajardo 2012). t1 may be infinite. False when the range
+// is empty.
+struct EquiangularSample {
+    double t = 0.0, pdf = 0.0;
+};
+inline bool sample_equiangular(double delta, double h, double t0, double t1, double u,
+                               EquiangularSample* out) {
+    const double a = std::atan2(t0 - delta, h);
+    const double b = std::isfinite(t1) ? std::atan2(t1 - delta, h) : 1.57079632679489661923;
+    if (!(b > a) || !(h > 0.0)) return false;
+    const double theta = a + u * (b - a);
+    out->t = delta + h * std::tan(theta);
+    const double r2 = h * h + (out->t - delta) * (out->t - delta);
+    out->pdf = h / ((b - a) * r2);
+    return true;
+}
+inline double equiangular_pdf(double delta, double h, double t0, double t1, double t) {
+    const double a = std::atan2(t0 - delta, h);
+    const double b = std::isfinite(t1) ? std::atan2(t1 - delta, h) : 1.57079632679489661923;
+    if (!(b > a) || t < t0 || t > t1) return 0.0;
+    return h / ((b - a) * (h * h + (t - delta) * (t - delta)));
+}
+
+// A distance in [0, t_end] with pdf sigma e^{-sigma t} / (1 - e^{-sigma t_end}) (free flight
+// conditioned on a collision inside the segment; t_end may be infinite). sigma > 0.
+struct TruncatedExponentialSample {
+    double t = 0.0, pdf = 0.0;
+};
+inline TruncatedExponentialSample sample_truncated_exponential(double sigma, double t_end,
+                                                               double u) {
+    const double mass = std::isfinite(t_end) ? -std::expm1(-sigma * t_end) : 1.0;
+    const double tau = -std::log1p(-u * mass);
+    return {tau / sigma, sigma * std::exp(-tau) / mass};
 }
 
 // Veach's power heuristic (beta = 2) for strategy f with nf samples against g with ng.

@@ -12,21 +12,10 @@ namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
-float max_abs_component(const vec3& v) {
-    return std::max(std::abs(v.x), std::max(std::abs(v.y), std::abs(v.z)));
-}
-
 // A direction whose cosine with `axis` follows HG(g): where light came from before it was
 // scattered into `axis`'s direction of travel reversed.
 vec3 sample_hg(float g, const vec3& axis, float u1, float u2) {
-    float cos_t;
-    if (std::abs(g) < 1e-3f) {
-        cos_t = 1.0f - 2.0f * u1;
-    } else {
-        const float s = (1.0f - g * g) / (1.0f - g + 2.0f * g * u1);
-        cos_t = (1.0f + g * g - s * s) / (2.0f * g);
-    }
-    cos_t = std::clamp(cos_t, -1.0f, 1.0f);
+    const float cos_t = sample_hg_cos(g, u1);
     const float sin_t = std::sqrt(std::max(0.0f, 1.0f - cos_t * cos_t));
     const float phi = kTwoPi * u2;
     return Frame(axis).to_world(vec3(sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t));
@@ -88,7 +77,7 @@ BakeEstimator::BakeEstimator(const RayScene& scene, const Media& media, const Im
 }
 
 vec3 BakeEstimator::origin(const vec3& p, const vec3& n) const {
-    return p + n * (2e-4f * std::max(1.0f, max_abs_component(p)));
+    return spawn_point(p, n);
 }
 
 bool BakeEstimator::visible(const vec3& from, const vec3& n, const vec3& dir, double distance,
@@ -102,8 +91,11 @@ bool BakeEstimator::visible(const vec3& from, const vec3& n, const vec3& dir, do
 void BakeEstimator::sample_emitters(const vec3& p, CounterRng& rng,
                                     std::vector<EmitterSample>& out) const {
     out.clear();
-    for (const Light& light : scene_.scene().lights) {
+    const std::vector<Light>& lights = scene_.scene().lights;
+    for (size_t index = 0; index < lights.size(); ++index) {
+        const Light& light = lights[index];
         EmitterSample s;
+        s.light = int(index);
         switch (light.type) {
             case LightType::Point: {
                 const vec3 to = light.position - p;
@@ -289,15 +281,19 @@ IrradianceParts BakeEstimator::estimate(const vec3& p, const vec3& n, const vec3
     return parts;
 }
 
-void BakeEstimator::direct_light(const EmitterSample& s, const vec3& p, const vec3& n,
+bool BakeEstimator::direct_light(const EmitterSample& s, const vec3& p, const vec3& n,
                                  float albedo_lum, CounterRng& rng, BakeCounters& counters,
-                                 IrradianceParts& parts) const {
+                                 IrradianceParts& parts, float* occluded_ratio) const {
     const float cos_x = glm::dot(n, s.dir);
-    // Below the horizon the segment to the emitter enters the receiver's own surface at
-    // once, so it is occluded and, by §5.2 (impulse contributions on unoccluded segments
-    // only), brings no scattered light either: no ray is cast for it.
-    if (cos_x <= 0.0f) return;
-    if (!visible(p, n, s.dir, s.distance, counters)) return;
+    // Below the horizon the segment to the emitter enters the receiver's own surface at once:
+    // no ray is cast, and like an occluded one the connection brings no direct light; the
+    // light scattered by the lit medium around the receiver is lit_medium_single's.
+    if (cos_x <= 0.0f || !visible(p, n, s.dir, s.distance, counters)) {
+        if (scatters_ && occluded_ratio)
+            *occluded_ratio =
+                multiple_over_single(unoccluded_scatter(s, p, n, albedo_lum, rng, counters));
+        return false;
+    }
     SegmentOptics optics;
     if (attenuates_) {
         const double length =
@@ -310,6 +306,118 @@ void BakeEstimator::direct_light(const EmitterSample& s, const vec3& p, const ve
         add_scattered(s.kind, s.intensity, s.dir, distance, s.shift, s.emitter_normal, optics, n,
                       albedo_lum, parts, counters);
     }
+    return true;
+}
+
+IrradianceParts BakeEstimator::unoccluded_scatter(const EmitterSample& s, const vec3& p,
+                                                  const vec3& n, float albedo_lum, CounterRng& rng,
+                                                  BakeCounters& counters) const {
+    IrradianceParts out;
+    const double length = std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
+    if (!(length > 0.0) || !std::isfinite(length)) return out;
+    const SegmentOptics optics = segment_optics(p, s.dir, length, rng);
+    add_scattered(s.kind, s.intensity, s.dir, length, s.shift, s.emitter_normal, optics, n,
+                  albedo_lum, out, counters);
+    return out;
+}
+
+float BakeEstimator::multiple_over_single(const IrradianceParts& unoccluded) {
+    // The response is the emitter's colour times a scalar per part: one ratio for all channels.
+    const float single = luminance(unoccluded.single);
+    return single > 0.0f ? luminance(unoccluded.multiple) / single : 0.0f;
+}
+
+void BakeEstimator::add_lit_medium(const EmitterSample& s, const vec3& p, const vec3& n,
+                                   float ratio, CounterRng& rng, BakeCounters& counters,
+                                   IrradianceParts& parts) const {
+    const LitMediumSample lit = lit_medium_single(s, p, n, rng, counters);
+    parts.single += lit.single;
+    if (settings_.media_bounces > 1) parts.multiple += lit.single * ratio;
+}
+
+BakeEstimator::LitMediumSample BakeEstimator::lit_medium_single(const EmitterSample& s,
+                                                                const vec3& p, const vec3& n,
+                                                                CounterRng& rng,
+                                                                BakeCounters& counters) const {
+    LitMediumSample r;
+    // Three numbers whatever happens: the streams of later vertices stay aligned.
+    const float u1 = rng.next_float(), u2 = rng.next_float();
+    const double u3 = rng.next_double();
+    const vec3 local_dir = sample_cosine_hemisphere(u1, u2);
+    if (local_dir.z <= 1e-6f) return r;
+    const vec3 w = Frame(n).to_world(local_dir);
+    const vec3 o = origin(p, n);
+    r.w = w;
+    // The part of w's ray that can scatter: to the media's exit or, in a medium filling all
+    // space, to the first surface (then nothing lies between p and the point).
+    double t_end = media_.exit_distance(o, w);
+    bool check_path = true;
+    if (!std::isfinite(t_end)) {
+        ++counters.rays;
+        const SurfaceHit hit = scene_.intersect(Ray{o, w, 0.0f, INFINITY});
+        t_end = hit.valid ? double(hit.distance) : kInfinity;
+        check_path = false;
+    }
+    if (!(t_end > 0.0)) return r;
+    const bool distant = !std::isfinite(s.distance);
+    const vec3 emitter = distant ? vec3(0.0f) : p + s.dir * float(s.distance);
+    double t = 0.0, pdf = 0.0;
+    if (distant) {
+        // Free flight at the segment's mean extinction (the exact optics below make any
+        // positive pdf unbiased).
+        double sigma;
+        if (std::isfinite(t_end)) {
+            const SegmentOptics along = media_.integrate(o, w, t_end);
+            sigma = (along.tau_s + along.tau_a) / t_end;
+        } else {
+            sigma = media_.at(o).sigma_t();
+        }
+        if (!(sigma > 0.0)) return r;
+        const TruncatedExponentialSample e = sample_truncated_exponential(sigma, t_end, u3);
+        t = e.t;
+        pdf = e.pdf;
+    } else {
+        const glm::dvec3 oc = glm::dvec3(emitter) - glm::dvec3(o);
+        const double delta = glm::dot(oc, glm::dvec3(w));
+        const double h = glm::length(oc - delta * glm::dvec3(w));
+        EquiangularSample ea;
+        if (h < 1e-9 || !sample_equiangular(delta, h, 0.0, t_end, u3, &ea)) return r;
+        t = ea.t;
+        pdf = ea.pdf;
+    }
+    if (!(pdf > 0.0) || !std::isfinite(t)) return r;
+    const vec3 x = o + w * float(t);
+    const HomogeneousMedium here = media_.at(x);
+    if (!(here.sigma_s > 0.0)) return r;
+    r.in_medium = true;
+    r.t = t;
+    vec3 l = s.dir;
+    double dist = kInfinity;
+    vec3 strength = s.irradiance;  // what reaches x from the emitter before the medium
+    if (!distant) {
+        const vec3 to = emitter - x;
+        dist = glm::length(to);
+        if (!(dist > 0.0)) return r;
+        l = to / float(dist);
+        float emission = 1.0f;
+        if (s.kind == EmitterKind::Area) emission = std::max(0.0f, -glm::dot(l, s.emitter_normal));
+        strength = s.intensity * float(emission / (dist * dist));
+        if (emission <= 0.0f) return r;
+    }
+    ++counters.rays;
+    if (scene_.occluded(Ray{x, l, 0.0f, distant ? INFINITY : float(dist) * (1.0f - 1e-4f)}))
+        return r;
+    if (check_path) {
+        ++counters.rays;
+        if (scene_.occluded(Ray{o, w, 0.0f, float(t) * (1.0f - 1e-4f)})) return r;
+    }
+    r.lit = true;
+    const double to_emitter = distant ? media_.exit_distance(x, l) : dist;
+    const double weight =
+        media_.transmittance(o, w, t) * here.sigma_s * hg_phase(here.g, glm::dot(l, w)) *
+        (std::isfinite(to_emitter) ? media_.transmittance(x, l, to_emitter) : 0.0) / pdf;
+    r.single = strength * float(kPiD * weight);
+    return r;
 }
 
 IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const vec3& albedo,
@@ -323,16 +431,37 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     std::vector<EmitterSample> local = std::move(buffers[size_t(depth)]);
     sample_emitters(p, rng, local);
     IrradianceParts fixed_parts;
-    for (const EmitterSample& s : local) {
-        if (!fixed || !s.fixed)
-            direct_light(s, p, n, albedo_lum, rng, counters, parts);
-        else if (!fixed->known)
-            direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts);
+    const bool learn = fixed && !fixed->known;
+    // Occluded connections' lit-medium estimates run after every connection is resolved, in
+    // emitter order, whether or not the fixed lights were reused: the same random numbers
+    // either way.
+    thread_local std::vector<std::vector<float>> ratio_buffers;
+    if (ratio_buffers.size() <= size_t(depth)) ratio_buffers.resize(size_t(depth) + 1);
+    std::vector<float>& occluded = ratio_buffers[size_t(depth)];
+    occluded.assign(local.size(), -1.0f);  // < 0: connected (or no lit-medium estimate)
+    for (size_t i = 0; i < local.size(); ++i) {
+        const EmitterSample& s = local[i];
+        float ratio = 0.0f;
+        if (!fixed || !s.fixed) {
+            if (!direct_light(s, p, n, albedo_lum, rng, counters, parts, &ratio) && scatters_)
+                occluded[i] = ratio;
+        } else if (learn) {
+            if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, &ratio) && scatters_)
+                fixed->occluded.emplace_back(s.light, ratio);
+        }
     }
     if (fixed) {
-        if (!fixed->known) *fixed = {true, fixed_parts};
+        if (learn) {
+            fixed->known = true;
+            fixed->parts = fixed_parts;
+        }
         parts += fixed->parts;
+        for (const auto& [light, ratio] : fixed->occluded)
+            for (size_t i = 0; i < local.size(); ++i)
+                if (local[i].light == light && local[i].fixed) occluded[i] = ratio;
     }
+    for (size_t i = 0; i < local.size(); ++i)
+        if (occluded[i] >= 0.0f) add_lit_medium(local[i], p, n, occluded[i], rng, counters, parts);
     buffers[size_t(depth)] = std::move(local);
     if (depth >= settings_.bounces) return parts;
     // One indirect segment, cosine-sampled: irradiance = pi x radiance on average.
@@ -378,19 +507,15 @@ vec3 BakeEstimator::point_lights_along(const vec3& o, const vec3& d, double t_ma
         if (light.type != LightType::Point) continue;
         const float u = rng.next_float();  // drawn for every point light: streams stay aligned
         if (!(t_end > 0.0)) continue;
-        // Equiangular sampling (Kulla & Fajardo 2012): t = delta + h tan(theta), theta uniform
-        // between the angles the segment's ends subtend from the light.
+        // Equiangular sampling: the 1/r^2 of the light along the segment.
         const glm::dvec3 oc = glm::dvec3(light.position) - glm::dvec3(o);
         const double delta = glm::dot(oc, glm::dvec3(d));
         const double h = glm::length(oc - delta * glm::dvec3(d));
         if (h < 1e-9) continue;  // the light on the ray's line: a set of measure zero
-        const double theta_a = std::atan2(-delta, h);
-        const double theta_b = std::isfinite(t_end) ? std::atan2(t_end - delta, h) : kPiD / 2;
-        if (!(theta_b > theta_a)) continue;
-        const double theta = theta_a + double(u) * (theta_b - theta_a);
-        const double t = delta + h * std::tan(theta);
+        EquiangularSample ea;
+        if (!sample_equiangular(delta, h, 0.0, t_end, double(u), &ea)) continue;
+        const double t = ea.t, pdf = ea.pdf;
         const double r2 = h * h + (t - delta) * (t - delta);
-        const double pdf = h / ((theta_b - theta_a) * r2);
         const vec3 x = o + d * float(t);
         const HomogeneousMedium here = media_.at(x);
         if (!(here.sigma_s > 0.0)) continue;

@@ -69,6 +69,10 @@ class BakeEstimator {
     struct FixedDirect {
         bool known = false;
         IrradianceParts parts;
+        // Impulse: the point and directional lights whose connection is occluded, with the
+        // multiple-to-single ratio of their unoccluded response; their lit-medium estimate
+        // (lit_medium_single) draws random numbers, so it runs on every path.
+        std::vector<std::pair<int, float>> occluded;
     };
     // Irradiance at p (normal n, albedo of the receiver for back-scatter): one path. `fixed`,
     // when given, is this point's FixedDirect, filled by the first call.
@@ -97,15 +101,47 @@ class BakeEstimator {
         vec3 emitter_normal{0.0f};  // area emitters
         double shift = 0.0;         // area emitters: sin(angle of the emitter normal to -dir)
         bool fixed = false;         // a point or directional light: the same for every path
+        int light = -1;             // index in the scene's lights
     };
+    // Light of one emitter sample scattered into (p, n) by the lit medium around p, for a
+    // connection the tables cannot take (occluded, or below the horizon): one point x_t drawn
+    // along a cosine-sampled direction w (free-flight distance for distant emitters,
+    // equiangular about the emitter point otherwise), a shadow ray from x_t to the emitter and
+    // one from p to x_t when geometry may lie between them; the single-scattered irradiance
+    // pi T(p, x_t) sigma_s(x_t) f_HG E(x_t) T(x_t, emitter) V / pdf(t), unbiased for single
+    // scattering through the real (heterogeneous, bounded) media and geometry.
+    struct LitMediumSample {
+        bool in_medium = false;  // a point was drawn inside the media
+        double t = 0.0;          // its distance from p along w
+        vec3 w{0.0f};
+        bool lit = false;   // it sees the emitter and the receiver
+        vec3 single{0.0f};  // the irradiance estimate
+    };
+    LitMediumSample lit_medium_single(const EmitterSample& s, const vec3& p, const vec3& n,
+                                      CounterRng& rng, BakeCounters& counters) const;
+    // The tables' scattered response for the connection as if it were unoccluded: its single
+    // and multiple irradiance (the ratio scales the lit-medium estimate into multiple
+    // scattering: the lit medium's visibility, single's estimate over the tables' single,
+    // applied to the broad multiple-scattering lobe).
+    IrradianceParts unoccluded_scatter(const EmitterSample& s, const vec3& p, const vec3& n,
+                                       float albedo_lum, CounterRng& rng,
+                                       BakeCounters& counters) const;
+    static float multiple_over_single(const IrradianceParts& unoccluded);
     void sample_emitters(const vec3& p, CounterRng& rng, std::vector<EmitterSample>& out) const;
     IrradianceParts surface_path(const vec3& p, const vec3& n, const vec3& albedo, int depth,
                                  CounterRng& rng, BakeCounters& counters,
                                  FixedDirect* fixed = nullptr) const;
     // Direct light of one emitter sample at (p, n): visibility, transmittance and, for impulse,
     // its scattered response, added to parts.
-    void direct_light(const EmitterSample& s, const vec3& p, const vec3& n, float albedo_lum,
-                      CounterRng& rng, BakeCounters& counters, IrradianceParts& parts) const;
+    // Returns false when the connection is occluded or below the horizon; then, for impulse,
+    // *occluded_ratio (when given) is multiple_over_single of its unoccluded response.
+    bool direct_light(const EmitterSample& s, const vec3& p, const vec3& n, float albedo_lum,
+                      CounterRng& rng, BakeCounters& counters, IrradianceParts& parts,
+                      float* occluded_ratio = nullptr) const;
+    // The lit-medium estimate of an occluded connection, added to parts: single, and
+    // multiple through `ratio`.
+    void add_lit_medium(const EmitterSample& s, const vec3& p, const vec3& n, float ratio,
+                        CounterRng& rng, BakeCounters& counters, IrradianceParts& parts) const;
     IrradianceParts volume_path(const vec3& p, const vec3& n, CounterRng& rng,
                                 BakeCounters& counters) const;
     // VPT's random walk from pos along dir: free flights, scattering in media (NEE, HG),

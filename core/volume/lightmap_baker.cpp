@@ -225,19 +225,30 @@ LayerSet LightmapBaker::layers(size_t mi) const {
 
 namespace freqlab {
 
-double valid_texel_luminance_sum(const LayerSet& lightmap, const std::string& layer) {
+namespace {
+// The texels a lightmap measure counts: Valid in `valid`, and flagged in `only` when given.
+bool measured(const Layer& valid, const std::vector<uint8_t>* only, size_t i) {
+    return int(valid.data[i]) == int(TexelState::Valid) &&
+           (!only || (i < only->size() && (*only)[i]));
+}
+}  // namespace
+
+double valid_texel_luminance_sum(const LayerSet& lightmap, const std::string& layer,
+                                 const std::vector<uint8_t>* only) {
     const Layer& l = lightmap.get(layer);
     const Layer& valid = lightmap.get("texel_valid");
     if (l.channels != 3) throw Error("", layer, "expected an RGB layer");
+    if (only && only->size() != lightmap.pixel_count())
+        throw Error("", layer, "the texel mask does not match the lightmap's size");
     double sum = 0.0;
     for (size_t i = 0; i < lightmap.pixel_count(); ++i)
-        if (int(valid.data[i]) == int(TexelState::Valid))
+        if (measured(valid, only, i))
             sum += luminance(vec3(l.data[3 * i], l.data[3 * i + 1], l.data[3 * i + 2]));
     return sum;
 }
 
-LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref,
-                                const std::string& layer) {
+LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref, const std::string& layer,
+                                const std::vector<uint8_t>* only) {
     if (test.width() != ref.width() || test.height() != ref.height())
         throw Error("", layer,
                     "lightmap sizes differ: " + std::to_string(test.width()) + "x" +
@@ -246,11 +257,13 @@ LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref,
     const Layer& a = test.get(layer);
     const Layer& b = ref.get(layer);
     const Layer& valid = ref.get("texel_valid");
+    if (only && only->size() != ref.pixel_count())
+        throw Error("", layer, "the texel mask does not match the lightmap's size");
     LightmapError e;
     double mean_ref = 0.0;
     const int ch = std::min(a.channels, b.channels);
     for (size_t i = 0; i < ref.pixel_count(); ++i) {
-        if (int(valid.data[i]) != int(TexelState::Valid)) continue;
+        if (!measured(valid, only, i)) continue;
         ++e.texels;
         for (int c = 0; c < ch; ++c) mean_ref += b.data[i * b.channels + c];
     }
@@ -259,7 +272,7 @@ LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref,
     const double eps2 = 1e-6 * mean_ref * mean_ref + 1e-30;
     double rel = 0.0, sq = 0.0, ref2 = 0.0;
     for (size_t i = 0; i < ref.pixel_count(); ++i) {
-        if (int(valid.data[i]) != int(TexelState::Valid)) continue;
+        if (!measured(valid, only, i)) continue;
         for (int c = 0; c < ch; ++c) {
             const double r = b.data[i * b.channels + c], t = a.data[i * a.channels + c];
             rel += (t - r) * (t - r) / (r * r + eps2);

@@ -88,11 +88,13 @@ struct LightmapError {
     double relmse = 0.0, rmse = 0.0, rel_l2 = 0.0;
     long texels = 0;
 };
-// Throws Error when sizes differ or a layer is missing.
-LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref,
-                                const std::string& layer);
+// Throws Error when sizes differ or a layer is missing. `only` (one flag per texel), when
+// given, restricts the measure to the flagged valid texels (shadowed_texels.h).
+LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref, const std::string& layer,
+                                const std::vector<uint8_t>* only = nullptr);
 // The luminance of an RGB layer summed over the lightmap's valid texels (the texels
-// compare_lightmaps measures); throws Error when a layer is missing.
-double valid_texel_luminance_sum(const LayerSet& lightmap, const std::string& layer);
+// compare_lightmaps measures; `only` as there); throws Error when a layer is missing.
+double valid_texel_luminance_sum(const LayerSet& lightmap, const std::string& layer,
+                                 const std::vector<uint8_t>* only = nullptr);
 
 }  // namespace freqlab

@@ -1,0 +1,92 @@
+#include "volume/shadowed_texels.h"
+
+#include <limits>
+
+#include "scene/scene.h"
+#include "volume/lightmap_baker.h"
+
+namespace freqlab {
+
+BakeKeyLight bake_key_light(const RayScene& scene) {
+    BakeKeyLight best;
+    const vec3 centre = 0.5f * (scene.bounds_min() + scene.bounds_max());
+    float best_irradiance = 0.0f;
+    const std::vector<Light>& lights = scene.scene().lights;
+    for (size_t i = 0; i < lights.size(); ++i) {
+        const Light& light = lights[i];
+        BakeKeyLight k;
+        k.found = true;
+        k.light = int(i);
+        float e = 0.0f;
+        if (light.type == LightType::Directional) {
+            k.distant = true;
+            k.direction = -light.direction;
+            e = luminance(light.intensity);
+        } else if (light.type == LightType::Point || light.type == LightType::Quad) {
+            const bool quad = light.type == LightType::Quad;
+            k.position =
+                quad ? light.corner + 0.5f * (light.edge_u + light.edge_v) : light.position;
+            const vec3 to = k.position - centre;
+            const float d2 = std::max(glm::dot(to, to), 1e-6f);
+            const float strength =
+                quad ? glm::length(glm::cross(light.edge_u, light.edge_v)) : 1.0f;
+            e = luminance(light.intensity) * strength / d2;
+        } else {
+            continue;
+        }
+        if (e > best_irradiance) {
+            best_irradiance = e;
+            best = k;
+        }
+    }
+    return best;
+}
+
+std::vector<uint8_t> shadowed_texels(const RayScene& scene, const ObjectLightmap& map,
+                                     const BakeKeyLight& key) {
+    std::vector<uint8_t> out(map.texels.size(), 0);
+    if (!key.found) return out;
+    for (size_t i = 0; i < map.texels.size(); ++i) {
+        const LightmapTexel& t = map.texels[i];
+        if (t.state != TexelState::Valid) continue;
+        vec3 dir = key.direction;
+        float distance = INFINITY;
+        if (!key.distant) {
+            const vec3 to = key.position - t.position;
+            distance = glm::length(to);
+            if (!(distance > 0.0f)) continue;
+            dir = to / distance;
+        }
+        if (glm::dot(dir, t.normal) <= 0.0f) continue;
+        const vec3 o = spawn_point(t.position, t.normal);
+        out[i] = scene.occluded(Ray{o, dir, 0.0f, distance * (1.0f - 1e-4f)}) ? 1 : 0;
+    }
+    return out;
+}
+
+RegionComparison compare_region(const LayerSet& test, const LayerSet& ref,
+                                const std::vector<uint8_t>& only) {
+    RegionComparison r;
+    const LightmapError e = compare_lightmaps(test, ref, "lm_irradiance", &only);
+    r.texels = e.texels;
+    r.irradiance_relmse = e.relmse;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    if (r.texels == 0) {
+        r.irradiance_ratio = r.inscatter_ratio = nan;
+        return r;
+    }
+    const double test_e = valid_texel_luminance_sum(test, "lm_irradiance", &only);
+    const double ref_e = valid_texel_luminance_sum(ref, "lm_irradiance", &only);
+    auto inscatter = [&](const LayerSet& l) {
+        return valid_texel_luminance_sum(l, "lm_inscatter_single", &only) +
+               valid_texel_luminance_sum(l, "lm_inscatter_multiple", &only);
+    };
+    const double test_s = inscatter(test), ref_s = inscatter(ref);
+    r.test_irradiance = test_e / double(r.texels);
+    r.ref_irradiance = ref_e / double(r.texels);
+    r.irradiance_ratio = ref_e > 0.0 ? test_e / ref_e : nan;
+    r.inscatter_ratio = ref_s > 0.0 ? test_s / ref_s : nan;
+    return r;
+}
+
+}  // namespace freqlab

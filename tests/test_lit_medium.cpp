@@ -1,0 +1,150 @@
+// Light scattered into shadows (issue "Method B, part 3"): where the connection to an emitter
+// is occluded the impulse bake estimates the light scattered by the lit medium around the
+// receiver (BakeEstimator::lit_medium_single). For single scattering that estimate is
+// unbiased, so its mean must equal VPT's exact single scattering at the same point (a t-test
+// on per-path means), for a directional light (free-flight distances) and a point light
+// (equiangular distances), in the umbra of an occluder inside a bounded layer of haze.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include <tbb/parallel_for.h>
+
+#include "scene/scene_loader.h"
+#include "shared_tables.h"
+#include "volume/lightmap_baker.h"
+#include "volume/shadowed_texels.h"
+
+using namespace freqlab;
+
+namespace {
+
+struct Fixture {
+    Scene scene;
+    Media media;
+    EmbreeDevice device{2};
+    std::unique_ptr<RayScene> rays;
+    explicit Fixture(const std::string& text) : scene(parse_scene(text, "test.json", "")) {
+        media = Media(scene.media);
+        rays = std::make_unique<RayScene>(scene, device);
+        rays->update(0.0f);
+    }
+};
+
+// The analytic scene scenes/analytic/haze_occluder.json with the light given.
+std::string occluder_in_haze(const std::string& light) {
+    return R"({"frames": 1, "camera": {"position": [0, -7, 4.5], "look_at": [0, 0, 0.5]},
+      "materials": {"m": {"type": "lambert", "albedo": 0.5}},
+      "objects": [{"name": "floor", "shape": {"type": "plane", "size": [8, 8]}, "material": "m"},
+                  {"name": "occluder", "shape": {"type": "box", "size": [1.2, 1.2, 0.3]},
+                   "material": "m", "transform": {"translate": [0, 0, 1.3]}}],
+      "lights": [)" +
+           light + R"(],
+      "media": [{"sigma_s": 0.3, "sigma_a": 0.02, "g": 0.3,
+                 "bounds": {"box": {"min": [-4, -4, 0], "max": [4, 4, 2.5]}}}]})";
+}
+
+struct Mean {
+    double mean = 0.0, variance_of_mean = 0.0;
+};
+
+// Mean single-scattered irradiance (luminance) of `paths` estimates at p, and its variance.
+Mean single_mean(const BakeEstimator& e, vec3 p, int paths, uint64_t key) {
+    double s = 0.0, s2 = 0.0;
+    BakeCounters counters;
+    for (int i = 0; i < paths; ++i) {
+        CounterRng rng(3, key, 0, uint64_t(i));
+        const IrradianceParts parts = e.estimate(p, vec3(0, 0, 1), vec3(0.5f), rng, counters);
+        EXPECT_EQ(parts.surface, vec3(0.0f)) << "not in the umbra";
+        const double v = luminance(parts.single);
+        s += v;
+        s2 += v * v;
+    }
+    const double m = s / paths;
+    return {m, std::max(0.0, s2 / paths - m * m) / paths};
+}
+
+void expect_impulse_equals_vpt_in_umbra(const std::string& light, const std::vector<vec3>& points) {
+    Fixture f(occluder_in_haze(light));
+    BakeSettings s;
+    s.bounces = 0;        // direct light at the receiver only: no surface vertex
+    s.media_bounces = 1;  // single scattering: what the lit-medium estimate is unbiased for
+    const ImpulseTables& tables = test_support::shared_impulse_tables();
+    const BakeEstimator impulse(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
+    const BakeEstimator vpt(*f.rays, f.media, nullptr, BakeMethod::Vpt, s);
+    const int paths = 40000;
+    std::vector<Mean> a(points.size()), b(points.size());
+    tbb::parallel_for(size_t(0), points.size(), [&](size_t i) {
+        a[i] = single_mean(impulse, points[i], paths, 11 + i);
+        b[i] = single_mean(vpt, points[i], paths, 101 + i);
+    });
+    for (size_t i = 0; i < points.size(); ++i) {
+        const double t =
+            (a[i].mean - b[i].mean) / std::sqrt(a[i].variance_of_mean + b[i].variance_of_mean);
+        std::printf("umbra (%.2f, %.2f): impulse single %.5f +- %.5f, vpt %.5f +- %.5f, t %.2f\n",
+                    points[i].x, points[i].y, a[i].mean, std::sqrt(a[i].variance_of_mean),
+                    b[i].mean, std::sqrt(b[i].variance_of_mean), t);
+        EXPECT_GT(b[i].mean, 0.0);
+        EXPECT_LT(std::abs(t), 4.0) << i;
+        // Precise enough to mean something: 2 % standard error or better.
+        EXPECT_LT(std::sqrt(a[i].variance_of_mean), 0.02 * a[i].mean);
+    }
+}
+
+}  // namespace
+
+TEST(LitMedium, DirectionalLightScatteredIntoAnUmbraEqualsVpt) {
+    expect_impulse_equals_vpt_in_umbra(
+        R"({"type": "directional", "direction": [-0.25, 0.15, -1], "irradiance": 3.0})",
+        {vec3(-0.3f, 0.2f, 0.0f), vec3(0.1f, 0.5f, 0.0f), vec3(-0.7f, -0.2f, 0.0f)});
+}
+
+TEST(LitMedium, PointLightScatteredIntoAnUmbraEqualsVpt) {
+    expect_impulse_equals_vpt_in_umbra(
+        R"({"type": "point", "position": [0.2, -0.1, 2.2], "intensity": 6.0})",
+        {vec3(-0.2f, 0.1f, 0.0f), vec3(0.3f, -0.2f, 0.0f)});
+}
+
+// The shadow mask: floor texels under the occluder (sun overhead, slightly tilted) are
+// shadowed, texels far from it are not, and the occluder's own top face is lit.
+TEST(LitMedium, ShadowedTexelsAreTheCastShadowOfTheKeyLight) {
+    Fixture f(occluder_in_haze(
+        R"({"type": "directional", "direction": [-0.25, 0.15, -1], "irradiance": 3.0},
+           {"type": "envmap", "radiance": 0.1})"));
+    const BakeKeyLight key = bake_key_light(*f.rays);
+    ASSERT_TRUE(key.found);
+    EXPECT_EQ(key.light, 0);
+    AtlasSettings a;
+    a.texel_density = 4.0f;
+    const std::vector<ObjectLightmap> maps = build_lightmaps(*f.rays, a);
+    ASSERT_EQ(maps.size(), 2u);
+    long shadowed = 0, valid = 0;
+    for (const ObjectLightmap& map : maps) {
+        const std::vector<uint8_t> mask = shadowed_texels(*f.rays, map, key);
+        for (size_t i = 0; i < map.texels.size(); ++i) {
+            const LightmapTexel& t = map.texels[i];
+            if (t.state != TexelState::Valid) {
+                EXPECT_EQ(mask[i], 0);
+                continue;
+            }
+            ++valid;
+            shadowed += mask[i];
+            if (map.object == 1) {
+                EXPECT_EQ(mask[i], 0) << "the occluder is not shadowed by anything";
+                continue;
+            }
+            // The floor: inside the occluder's projection along the sun (the box's footprint
+            // shifted by its height times the sun's slope) shadowed, well outside lit.
+            const float sx = t.position.x + 0.25f * 1.3f, sy = t.position.y - 0.15f * 1.3f;
+            const float inside = std::max(std::abs(sx), std::abs(sy));
+            if (inside < 0.45f) {
+                EXPECT_EQ(mask[i], 1) << t.position.x << "," << t.position.y;
+            }
+            if (inside > 0.8f) {
+                EXPECT_EQ(mask[i], 0) << t.position.x << "," << t.position.y;
+            }
+        }
+    }
+    EXPECT_GT(shadowed, 10);
+    EXPECT_LT(shadowed, valid / 10);
+}
