@@ -221,6 +221,7 @@ int run_tables_query(const TablesQueryArgs& a) {
     ImpulseQuery q;
     q.emitter = parse_emitter(a.emitter);
     q.variant = parse_variant(a.variant);
+    q.receiver = parse_receiver(a.receiver);
     q.distance = a.distance;
     q.shift = a.shift;
     q.medium = HomogeneousMedium{a.sigma_s, a.sigma_a, a.g};
@@ -241,6 +242,7 @@ int run_tables_query(const TablesQueryArgs& a) {
     const ImpulseResponse r = query_impulse(tables, q);
     json out = {{"emitter", a.emitter},
                 {"variant", a.variant},
+                {"receiver", a.receiver},
                 {"distance", a.distance},
                 {"medium", {{"sigma_s", a.sigma_s}, {"sigma_a", a.sigma_a}, {"g", a.g}}},
                 {"bounces", a.bounces},

@@ -83,6 +83,7 @@ struct TablesQueryArgs {
     std::string bounces = "1";         // all | N
     double shift = 0.0;                // area: sin of the emitter normal's angle to the receiver
     std::string variant = "infinite";  // infinite | surface
+    std::string receiver = "medium";   // medium | surface
 };
 int run_tables_query(const TablesQueryArgs& args);
 // Generates (or reuses) the table file, then verifies it against direct computation.

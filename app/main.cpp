@@ -128,6 +128,9 @@ int main(int argc, char** argv) {
                        "direction to the receiver, in [0, 1]");
     tables->add_option("--variant", tq.variant,
                        "infinite (pure infinite medium) or surface (back-scatter shift 0.125)");
+    tables->add_option("--receiver", tq.receiver,
+                       "medium (a probe: medium all around) or surface (a lightmap texel: "
+                       "directional multiple scattering of the slab whose bottom holds it)");
     tables->add_option("--bounces", tq.bounces,
                        "1, N or all (multiple scattering: point emitters)");
     std::string tables_out;

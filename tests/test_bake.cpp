@@ -297,7 +297,10 @@ TEST(Bake, TabulatedIrradianceMatchesQueryAndDoubleProduct) {
         q.shift = shift;
         q.medium = {albedo, 1.0 - albedo, g};
         q.last_bounce = tables.bounces();
-        const ImpulseResponse r = query_impulse(tables, q);
+        const ImpulseResponse r = query_impulse(tables, q);  // probes: receiver in the medium
+        ImpulseQuery on_surface = q;                         // lightmap texels
+        on_surface.receiver = Receiver::OnSurface;
+        const ImpulseResponse texel = query_impulse(tables, on_surface);
         // Receiver normal at `cos` from the single lobe's axis (z); the light axis is z too,
         // except for area emitters whose single lobe is tilted by axis_tilt about y.
         const glm::dvec3 n(std::sqrt(1.0 - cos * cos), 0.0, cos);
@@ -305,7 +308,7 @@ TEST(Bake, TabulatedIrradianceMatchesQueryAndDoubleProduct) {
         const double single = zh_double_product(kImpulseOrder, r.single.data(), z, cosine_zh, n);
         const glm::dvec3 multiple_axis = q.emitter == EmitterKind::Area ? light : z;
         const double multiple =
-            zh_double_product(kImpulseOrder, r.multiple.data(), multiple_axis, cosine_zh, n);
+            zh_double_product(kImpulseOrder, texel.multiple.data(), multiple_axis, cosine_zh, n);
         const ImpulseIrradiance::At at = ImpulseIrradiance::at(D);
         ScatteredIrradiance e;
         if (kind == 0) e = table.point(at, cos);

@@ -225,6 +225,7 @@ void BakeEstimator::add_scattered(EmitterKind kind, const vec3& intensity, const
     q.last_bounce = last_bounce;
     q.collapsed = true;
     q.variant = TableVariant::Infinite;
+    q.receiver = Receiver::OnSurface;
     const ImpulseResponse r = query_impulse(*tables_, q);
     const glm::dvec3 l(dir), nd(n);
     const glm::dvec3 axis =

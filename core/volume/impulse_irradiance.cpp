@@ -180,8 +180,14 @@ ImpulseIrradiance::ImpulseIrradiance(const ImpulseTables& tables, double g, doub
             polynomial_coefficients(r.single, cosine_zh, inv_dir, directional_.node(0, i, 0));
             store_lobe(r.single, inv_dir, &lobe_directional_[size_t(i) * 2 * kB]);
             if (multiple) {
-                polynomial_coefficients(r.multiple, cosine_zh, inv_dir, directional_.node(0, i, 1));
+                // Probes are mid-air (the half-space); lightmap texels lie on the medium's
+                // boundary (the slab-bottom table).
                 store_lobe(r.multiple, inv_dir, &lobe_directional_[size_t(i) * 2 * kB + kB]);
+                local.receiver = Receiver::OnSurface;
+                const ImpulseResponse texel = query_impulse(tables, local);
+                local.receiver = Receiver::InMedium;
+                polynomial_coefficients(texel.multiple, cosine_zh, inv_dir,
+                                        directional_.node(0, i, 1));
             }
             local.emitter = EmitterKind::Area;
             for (int s = 0; s < kS; ++s) {

@@ -52,7 +52,9 @@ ImpulseResponse query_impulse(const ImpulseTables& t, const ImpulseQuery& q) {
         case EmitterKind::Directional:
             r.single = t.directional_single().single(m, d, q.collapsed);
             if (multiple)
-                r.multiple = t.directional_multiple().bounces_in(similar, d, 2, q.last_bounce);
+                r.multiple = (q.receiver == Receiver::OnSurface ? t.directional_multiple_bottom()
+                                                                : t.directional_multiple())
+                                 .bounces_in(similar, d, 2, q.last_bounce);
             break;
         case EmitterKind::Area: {
             const TiltedZh s = t.area_single().single(m, d, q.shift);
@@ -104,6 +106,16 @@ const char* to_string(EmitterKind e) {
     return e == EmitterKind::Point         ? "point"
            : e == EmitterKind::Directional ? "directional"
                                            : "area";
+}
+
+Receiver parse_receiver(const std::string& s) {
+    if (s == "medium") return Receiver::InMedium;
+    if (s == "surface") return Receiver::OnSurface;
+    throw Error("--receiver", s, "expected medium or surface");
+}
+
+const char* to_string(Receiver r) {
+    return r == Receiver::InMedium ? "medium" : "surface";
 }
 
 const char* to_string(TableVariant v) {

@@ -30,6 +30,11 @@ namespace freqlab {
 
 enum class EmitterKind { Point, Directional, Area };
 enum class TableVariant { Infinite, Surface };
+// Where the receiver sits. InMedium: a probe, the medium all around it (the tables above).
+// OnSurface: a lightmap texel, the medium ending at its surface; directional multiple
+// scattering then comes from the slab whose bottom face holds the receiver
+// (slab_bottom_multiple_scatter.h). Point and area emitters keep the infinite medium.
+enum class Receiver { InMedium, OnSurface };
 constexpr double kBackScatterShift = 0.125;
 
 struct ImpulseQuery {
@@ -39,6 +44,7 @@ struct ImpulseQuery {
     HomogeneousMedium medium{1.0, 0.0, 0.0};
     int last_bounce = 1;  // 1: single scattering only; K: bounces 2..K as `multiple`
     TableVariant variant = TableVariant::Infinite;
+    Receiver receiver = Receiver::InMedium;
     // Bakers: g and the albedo quantised (2^-20, 2^-24; relative change < 1e-6) so that the
     // sums over phase terms and bounces collapse once per medium (collapse_memo.h).
     bool collapsed = false;
@@ -55,7 +61,9 @@ ImpulseResponse query_impulse(const ImpulseTables& tables, const ImpulseQuery& q
 const char* normalization_of(EmitterKind emitter);
 EmitterKind parse_emitter(const std::string& text);   // throws Error on --emitter
 TableVariant parse_variant(const std::string& text);  // throws Error on --variant
+Receiver parse_receiver(const std::string& text);     // throws Error on --receiver
 const char* to_string(EmitterKind emitter);
 const char* to_string(TableVariant variant);
+const char* to_string(Receiver receiver);
 
 }  // namespace freqlab

@@ -35,7 +35,7 @@ size_t payload_floats(int bounces) {
     const size_t bins = ZhDistanceTable::kBins, order = kImpulseOrder;
     return 2 * (kPhaseTerms * bins * order + bins) + bins * kShiftBins * 2 +
            size_t(bounces) * bins * order + size_t(bounces + 1) * bins +
-           size_t(bounces) * bins * order;
+           2 * size_t(bounces) * bins * order;
 }
 
 // The area responses are stored as IEEE half floats (Imath): relative rounding 2.4e-4, 20x
@@ -57,6 +57,9 @@ ImpulseTables ImpulseTables::build(int bounces, Progress* progress) {
     t.point_multiple_ = std::make_shared<PointMultipleScatter>(bounces);
     if (progress) progress->begin_stage("directional multiple scattering", 1);
     t.directional_multiple_ = std::make_shared<SlabMultipleScatter>(bounces);
+    if (progress) progress->begin_stage("directional multiple scattering, slab bottom", 1);
+    t.directional_multiple_bottom_ =
+        std::make_shared<SlabMultipleScatter>(build_slab_bottom_multiple_scatter(bounces));
     if (progress) progress->begin_stage("area single scattering", 1);
     t.area_single_ = std::make_shared<AreaSingleScatterTable>();
     return t;
@@ -82,8 +85,10 @@ void ImpulseTables::save(const fs::path& path) const {
         for (const ZhVector& z : point_multiple_->zh()[size_t(k)]) put(payload, z);
     for (int k = 0; k <= bounces; ++k)
         for (double v : point_multiple_->fluence_scaled()[size_t(k)]) payload.push_back(float(v));
-    for (int k = 1; k <= bounces; ++k)
-        for (const ZhVector& z : directional_multiple_->zh()[size_t(k)]) put(payload, z);
+    for (const SlabMultipleScatter* slab :
+         {directional_multiple_.get(), directional_multiple_bottom_.get()})
+        for (int k = 1; k <= bounces; ++k)
+            for (const ZhVector& z : slab->zh()[size_t(k)]) put(payload, z);
     if (payload.size() != payload_floats(bounces))
         throw Error(path.string(), "payload", "internal: table layout and size disagree");
     std::string bytes(reinterpret_cast<const char*>(payload.data()),
@@ -181,10 +186,12 @@ ImpulseTables ImpulseTables::load(const fs::path& path) {
     for (auto& row : fluence)
         for (double& v : row) v = double(*p++);
     t.point_multiple_ = std::make_shared<PointMultipleScatter>(std::move(fluence), std::move(zh));
-    std::vector<std::vector<ZhVector>> slab(size_t(bounces) + 1, std::vector<ZhVector>(bins));
-    for (int k = 1; k <= bounces; ++k)
-        for (ZhVector& z : slab[size_t(k)]) z = take(p);
-    t.directional_multiple_ = std::make_shared<SlabMultipleScatter>(std::move(slab));
+    for (auto* slab_table : {&t.directional_multiple_, &t.directional_multiple_bottom_}) {
+        std::vector<std::vector<ZhVector>> slab(size_t(bounces) + 1, std::vector<ZhVector>(bins));
+        for (int k = 1; k <= bounces; ++k)
+            for (ZhVector& z : slab[size_t(k)]) z = take(p);
+        *slab_table = std::make_shared<SlabMultipleScatter>(std::move(slab));
+    }
     return t;
 }
 

@@ -9,8 +9,10 @@
 // |                              | half floats, kBins x kShiftBins x kGNodes x kImpulseOrder|
 // | point multiple scattering    | bounces x kBins x kImpulseOrder + (bounces+1) x kBins  |
 // | directional multiple scatter.| bounces x kBins x kImpulseOrder                        |
+// | the same, receiver on the    | bounces x kBins x kImpulseOrder                        |
+// | bottom face of a slab        |                                                        |
 // Stored as float32 (the tables' own error is ~1e-4; float rounding is 6e-8) except the area
-// responses (half floats, see impulse_tables.cpp): 1.9 MB at 30 bounces.
+// responses (half floats, see impulse_tables.cpp): 2.2 MB at 30 bounces.
 #pragma once
 
 #include <filesystem>
@@ -21,13 +23,14 @@
 #include "volume/area_tables.h"
 #include "volume/impulse_response.h"
 #include "volume/multiple_scatter.h"
+#include "volume/slab_bottom_multiple_scatter.h"
 #include "volume/slab_multiple_scatter.h"
 
 namespace freqlab {
 
 class ImpulseTables {
   public:
-    static constexpr int kFormatVersion = 2;
+    static constexpr int kFormatVersion = 3;
 
     static ImpulseTables build(int bounces, Progress* progress = nullptr);
     void save(const std::filesystem::path& path) const;            // atomic
@@ -41,13 +44,18 @@ class ImpulseTables {
     const AreaSingleScatterTable& area_single() const { return *area_single_; }
     const PointMultipleScatter& point_multiple() const { return *point_multiple_; }
     const SlabMultipleScatter& directional_multiple() const { return *directional_multiple_; }
+    // Directional multiple scattering at a receiver on the bottom face of a slab whose
+    // thickness is the depth (slab_bottom_multiple_scatter.h): lightmap texels.
+    const SlabMultipleScatter& directional_multiple_bottom() const {
+        return *directional_multiple_bottom_;
+    }
     int bounces() const { return point_multiple_->bounces(); }
 
   private:
     std::shared_ptr<SingleScatterTable> point_single_, directional_single_;
     std::shared_ptr<AreaSingleScatterTable> area_single_;
     std::shared_ptr<PointMultipleScatter> point_multiple_;
-    std::shared_ptr<SlabMultipleScatter> directional_multiple_;
+    std::shared_ptr<SlabMultipleScatter> directional_multiple_, directional_multiple_bottom_;
 };
 
 }  // namespace freqlab

@@ -176,6 +176,7 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
         q.medium = m;
         q.medium.g = std::clamp(m.g, -kGRange, kGRange);
         q.last_bounce = std::min(settings_.media_bounces, table_bounces_);
+        q.receiver = Receiver::OnSurface;
         if (!(q.distance > 0.0) || m.sigma_t() * q.distance > ZhDistanceTable::kMaxD) continue;
         const ImpulseResponse r = query_impulse(*tables_, q);
         for (const auto& [name, zh] :

@@ -82,9 +82,14 @@ SlabMultipleScatter::SlabMultipleScatter(std::vector<std::vector<ZhVector>> zh)
     log_fluence_.assign(zh_.size(), std::vector<double>(ZhDistanceTable::kBins));
     for (int i = 0; i < ZhDistanceTable::kBins; ++i)
         log_fluence_[0][size_t(i)] = -ZhDistanceTable::distance_of_bin(i);
+    // A bounce below the float range where it was stored (a thin slab's k-th bounce grows as
+    // Z^k: 1e-90 at Z = 1e-3, k = 30) reads 0: its log fluence is held at e^-745 (0 in
+    // double), finite so that interpolation next to it stays defined, and its shape at 0.
     for (size_t k = 1; k < zh_.size(); ++k)
-        for (int i = 0; i < ZhDistanceTable::kBins; ++i)
-            log_fluence_[k][size_t(i)] = std::log(std::sqrt(4.0 * kPiD) * zh_[k][size_t(i)][0]);
+        for (int i = 0; i < ZhDistanceTable::kBins; ++i) {
+            const double dc = zh_[k][size_t(i)][0];
+            log_fluence_[k][size_t(i)] = dc > 0.0 ? std::log(std::sqrt(4.0 * kPiD) * dc) : -745.0;
+        }
     derive();
 }
 
@@ -97,7 +102,8 @@ void SlabMultipleScatter::derive() {
         for (size_t i = 0; i < nb; ++i) {
             packed_log_fluence_[i * nk + k] = log_fluence_[k][i];
             for (size_t l = 0; l < size_t(kImpulseOrder); ++l)
-                packed_shape_[(i * nk + k) * kImpulseOrder + l] = zh_[k][i][l] / zh_[k][i][0];
+                packed_shape_[(i * nk + k) * kImpulseOrder + l] =
+                    zh_[k][i][0] > 0.0 ? zh_[k][i][l] / zh_[k][i][0] : 0.0;
         }
 }
 
