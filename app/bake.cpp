@@ -67,9 +67,11 @@ void print_debug_texel(const RayScene& rays, const Media& media, const ImpulseTa
     if (std::sscanf(xy.c_str(), "%d,%d", &x, &y) != 2)
         throw Error("--debug-texel", spec, "expected [LIGHTMAP:]X,Y");
     const ObjectLightmap* map = nullptr;
-    for (const ObjectLightmap& m : baker.lightmaps())
-        if (name.empty() || lightmap_name(scene, m) == name) {
-            map = &m;
+    size_t lightmap_index = 0;
+    for (size_t i = 0; i < baker.lightmaps().size(); ++i)
+        if (name.empty() || lightmap_name(scene, baker.lightmaps()[i]) == name) {
+            map = &baker.lightmaps()[i];
+            lightmap_index = i;
             break;
         }
     if (!map) throw Error("--debug-texel", spec, "no lightmap named '" + name + "'");
@@ -99,7 +101,8 @@ void print_debug_texel(const RayScene& rays, const Media& media, const ImpulseTa
         IrradianceParts sum;
         BakeCounters counters;
         for (int s = 0; s < settings.spp; ++s) {
-            CounterRng rng(uint64_t(settings.seed), 0, size_t(y) * map->width + x, uint64_t(s));
+            CounterRng rng =
+                texel_random(settings.seed, lightmap_index, size_t(y) * map->width + x, s);
             sum += estimator.estimate(t.position, t.normal, t.albedo, rng, counters);
         }
         const float inv = 1.0f / float(settings.spp);
@@ -107,6 +110,12 @@ void print_debug_texel(const RayScene& rays, const Media& media, const ImpulseTa
                     luminance(sum.surface) * inv, luminance(sum.single) * inv,
                     luminance(sum.multiple) * inv, luminance(sum.total()) * inv);
     }
+    // The baked method's record of the texel's first path (what the workbench's trace shows).
+    CounterRng rng = texel_random(settings.seed, lightmap_index, size_t(y) * map->width + x, 0);
+    std::printf("  trace of %s, path 0:\n", to_string(baker.method()));
+    for (const std::string& line :
+         baker.estimator().trace_texel(t.position, t.normal, t.albedo, rng))
+        std::printf("    %s\n", line.c_str());
 }
 
 }  // namespace

@@ -18,6 +18,10 @@
 // lm_irradiance relMSE and the ratio of impulse's multiple scattering to VPT's (mean over
 // valid texels), against the optical thickness across the scene's bounds (the least of the
 // three axes through its centre). Writes bench_bake_thickness.json / .csv / .png.
+//
+// Both report the key light's shadowed texels separately (volume/shadowed_texels.h): texels
+// whose connection to it is occluded, where the tables do not apply (relMSE there, and impulse's
+// in-scattered irradiance over VPT's).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -34,6 +38,7 @@
 #include "settings/settings_group.h"
 #include "volume/impulse_tables.h"
 #include "volume/lightmap_baker.h"
+#include "volume/shadowed_texels.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -69,6 +74,24 @@ std::vector<CurvePoint> curve(LightmapBaker& baker, const LightmapBaker& referen
                      baker.samples(), baker.stats().bake_ms, points.back().relmse);
     }
     return points;
+}
+
+// The error over the key light's cast shadows (shadowed_texels.h) of all lightmaps.
+RegionComparison shadowed_against(const LightmapBaker& baker, const LightmapBaker& reference,
+                                  const RayScene& rays) {
+    const BakeKeyLight key = bake_key_light(rays);
+    std::vector<RegionComparison> parts;
+    for (size_t i = 0; i < baker.lightmaps().size(); ++i)
+        parts.push_back(compare_region(baker.layers(i), reference.layers(i),
+                                       shadowed_texels(rays, baker.lightmaps()[i], key)));
+    return combine_regions(parts);
+}
+
+json region_json(const RegionComparison& c) {
+    return {{"texels", c.texels},
+            {"lm_irradiance_relmse", c.irradiance_relmse},
+            {"lm_irradiance_over_reference", c.irradiance_ratio},
+            {"inscatter_over_reference", c.inscatter_ratio}};
 }
 
 // What both bake studies start from: the bake settings with --set applied, the scene and its
@@ -162,6 +185,16 @@ int run_bench_bake(const BenchArgs& a) {
         c_vpt = curve(vpt, reference, a.reference_spp / 4);
     }
     const double impulse_error = c_impulse.back().relmse, impulse_ms = c_impulse.back().ms;
+    json shadowed = json::object();
+    if (curves) {
+        const RegionComparison si = shadowed_against(impulse, reference, rays);
+        const RegionComparison se = shadowed_against(extinction, reference, rays);
+        shadowed = {{"impulse", region_json(si)}, {"extinction", region_json(se)}};
+        std::fprintf(stderr,
+                     "  shadowed texels: %ld, relMSE impulse %.4f extinction %.4f, impulse's "
+                     "in-scattering over vpt's %.3f\n",
+                     si.texels, si.irradiance_relmse, se.irradiance_relmse, si.inscatter_ratio);
+    }
     const double vpt_ms = curves ? time_to_reach(c_vpt, impulse_error) : -1.0;
     // The speed-up at every impulse pass (NaN where VPT never reached that error).
     json speedup = json::array();
@@ -240,6 +273,7 @@ int run_bench_bake(const BenchArgs& a) {
         {"vpt_ms_to_impulse_error", vpt_ms},
         {"vpt_over_impulse_time", vpt_ms > 0 ? vpt_ms / impulse_ms : NAN},
         {"vpt_reached_impulse_error", vpt_ms > 0},
+        {"shadowed", shadowed},
         {"vpt_over_impulse_time_curve", speedup},
         {"vpt_over_impulse_time_best", {{"spp", best_spp}, {"ratio", best_speedup}}},
         {"overhead",
@@ -298,7 +332,9 @@ int run_bench_bake_thickness(const BenchArgs& a) {
     json rows = json::array();
     std::string csv =
         "density_factor,tau_across,impulse_relmse,extinction_relmse,"
-        "multiple_impulse_over_vpt,reference_ms,impulse_ms\n";
+        "multiple_impulse_over_vpt,shadowed_texels,shadowed_impulse_relmse,"
+        "shadowed_extinction_relmse,shadowed_inscatter_impulse_over_vpt,reference_ms,"
+        "impulse_ms\n";
     PlotSeries s_impulse{"impulse", {1.0f, 0.6f, 0.2f}, {}, {}};
     PlotSeries s_extinction{"extinction", {0.5f, 0.5f, 0.5f}, {}, {}};
     for (double factor : {0.25, 0.5, 1.0, 2.0, 4.0, 8.0}) {
@@ -318,20 +354,29 @@ int run_bench_bake_thickness(const BenchArgs& a) {
         const double m_ref = layer_sum(reference, "lm_inscatter_multiple");
         const double m_ratio =
             m_ref > 0.0 ? layer_sum(impulse, "lm_inscatter_multiple") / m_ref : NAN;
+        const RegionComparison sh_i = shadowed_against(impulse, reference, rays);
+        const RegionComparison sh_e = shadowed_against(extinction, reference, rays);
         std::fprintf(stderr,
                      "  density x %-5g tau across %7.3f: relMSE impulse %.4f extinction %.4f, "
-                     "multiple impulse / vpt %.3f\n",
-                     factor, tau, e_impulse, e_extinction, m_ratio);
-        rows.push_back({{"density_factor", factor},
-                        {"tau_across", tau},
-                        {"impulse_relmse", e_impulse},
-                        {"extinction_relmse", e_extinction},
-                        {"multiple_impulse_over_vpt", m_ratio},
-                        {"reference_ms", reference.stats().bake_ms},
-                        {"impulse_ms", impulse.stats().bake_ms}});
+                     "multiple impulse / vpt %.3f; shadowed (%ld texels) relMSE impulse %.4f "
+                     "extinction %.4f, in-scattering impulse / vpt %.3f\n",
+                     factor, tau, e_impulse, e_extinction, m_ratio, sh_i.texels,
+                     sh_i.irradiance_relmse, sh_e.irradiance_relmse, sh_i.inscatter_ratio);
+        rows.push_back(
+            {{"density_factor", factor},
+             {"tau_across", tau},
+             {"impulse_relmse", e_impulse},
+             {"extinction_relmse", e_extinction},
+             {"multiple_impulse_over_vpt", m_ratio},
+             {"shadowed", {{"impulse", region_json(sh_i)}, {"extinction", region_json(sh_e)}}},
+             {"reference_ms", reference.stats().bake_ms},
+             {"impulse_ms", impulse.stats().bake_ms}});
         csv += std::to_string(factor) + "," + std::to_string(tau) + "," +
                std::to_string(e_impulse) + "," + std::to_string(e_extinction) + "," +
-               std::to_string(m_ratio) + "," + std::to_string(reference.stats().bake_ms) + "," +
+               std::to_string(m_ratio) + "," + std::to_string(sh_i.texels) + "," +
+               std::to_string(sh_i.irradiance_relmse) + "," +
+               std::to_string(sh_e.irradiance_relmse) + "," + std::to_string(sh_i.inscatter_ratio) +
+               "," + std::to_string(reference.stats().bake_ms) + "," +
                std::to_string(impulse.stats().bake_ms) + "\n";
         if (tau > 0.0 && e_impulse > 0.0 && e_extinction > 0.0) {
             s_impulse.x.push_back(tau), s_impulse.y.push_back(e_impulse);

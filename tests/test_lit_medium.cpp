@@ -148,3 +148,48 @@ TEST(LitMedium, ShadowedTexelsAreTheCastShadowOfTheKeyLight) {
     EXPECT_GT(shadowed, 10);
     EXPECT_LT(shadowed, valid / 10);
 }
+
+// The analytic scene itself (scenes/analytic/haze_occluder.json): its floor baked by impulse
+// and VPT, compared over the umbra (the shadowed texels) and the far field (the rest).
+// Single scattering without surface bounces is what the lit-medium estimate is unbiased for:
+// the umbra's mean must match VPT's within the two bakes' noise. With everything on, the
+// umbra holds at least 55 % of VPT's light (it held 10 % when occluded connections brought
+// no scattered light: the value with no haze); what is still missing is measured in README.
+TEST(LitMedium, HazeOccluderFloorUmbraAgainstVpt) {
+    const Scene scene =
+        load_scene(std::string(FREQLAB_SOURCE_DIR) + "/scenes/analytic/haze_occluder.json");
+    const Media media(scene.media);
+    EmbreeDevice device{2};
+    RayScene rays(scene, device);
+    rays.update(0.0f);
+    const ImpulseTables& tables = test_support::shared_impulse_tables();
+    const BakeKeyLight key = bake_key_light(rays);
+    auto umbra = [&](BakeSettings s, int impulse_spp, int vpt_spp) {
+        s.texel_density = 4.0f;
+        s.probes_x = s.probes_y = s.probes_z = 0;
+        LightmapBaker impulse(rays, media, &tables, BakeMethod::Impulse, s);
+        impulse.run_pass(impulse_spp);
+        s.seed = 7919;
+        LightmapBaker vpt(rays, media, nullptr, BakeMethod::Vpt, s);
+        vpt.run_pass(vpt_spp);
+        const std::vector<uint8_t> mask = shadowed_texels(rays, impulse.lightmaps()[0], key);
+        std::vector<uint8_t> far(mask.size());
+        for (size_t i = 0; i < mask.size(); ++i) far[i] = mask[i] ? 0 : 1;
+        return std::pair{compare_region(impulse.layers(0), vpt.layers(0), mask),
+                         compare_region(impulse.layers(0), vpt.layers(0), far)};
+    };
+    BakeSettings single;
+    single.bounces = 0;
+    single.media_bounces = 1;
+    const auto [u1, f1] = umbra(single, 256, 1024);
+    std::printf(
+        "single scattering: umbra (%ld texels) impulse %.4f vpt %.4f; far field %.4f / %.4f\n",
+        u1.texels, u1.test_irradiance, u1.ref_irradiance, f1.test_irradiance, f1.ref_irradiance);
+    ASSERT_GT(u1.texels, 15);
+    EXPECT_NEAR(u1.irradiance_ratio, 1.0, 0.03);
+    const auto [u, f] = umbra(BakeSettings{}, 256, 1024);
+    std::printf("all light: umbra impulse %.4f vpt %.4f (ratio %.3f); far field ratio %.3f\n",
+                u.test_irradiance, u.ref_irradiance, u.irradiance_ratio, f.irradiance_ratio);
+    EXPECT_GT(u.irradiance_ratio, 0.55);
+    EXPECT_LT(u.irradiance_ratio, 1.1);
+}

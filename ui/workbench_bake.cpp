@@ -262,7 +262,7 @@ std::vector<std::string> bake_trace(Workbench::State& s, int x, int y) {
                                       std::to_string(tx) + "," + std::to_string(ty) + " (" +
                                       texel_state_legend()[size_t(t.state)] + ")"};
     if (t.state != TexelState::Valid) return lines;
-    CounterRng rng(uint64_t(b.settings.seed), 0, size_t(ty) * map.width + tx, 0);
+    CounterRng rng = texel_random(b.settings.seed, size_t(m), size_t(ty) * map.width + tx, 0);
     for (std::string& l : b.baker->estimator().trace_texel(t.position, t.normal, t.albedo, rng))
         lines.push_back(std::move(l));
     return lines;

@@ -290,9 +290,12 @@ bool BakeEstimator::direct_light(const EmitterSample& s, const vec3& p, const ve
     // no ray is cast, and like an occluded one the connection brings no direct light; the
     // light scattered by the lit medium around the receiver is lit_medium_single's.
     if (cos_x <= 0.0f || !visible(p, n, s.dir, s.distance, counters)) {
+        // The ratio is that of a receiver facing the emitter: at the receiver's own
+        // orientation a lobe pointing away leaves single scattering at the ZH's ringing, and
+        // the ratio would explode (sun_haze at 4x density: multiple 4x VPT's).
         if (scatters_ && occluded_ratio)
-            *occluded_ratio =
-                multiple_over_single(unoccluded_scatter(s, p, n, albedo_lum, rng, counters));
+            *occluded_ratio = multiple_over_single(
+                unoccluded_scatter(s, p, s.dir, albedo_lum, rng, counters));
         return false;
     }
     SegmentOptics optics;

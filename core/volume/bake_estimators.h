@@ -119,7 +119,8 @@ class BakeEstimator {
     };
     LitMediumSample lit_medium_single(const EmitterSample& s, const vec3& p, const vec3& n,
                                       CounterRng& rng, BakeCounters& counters) const;
-    // The tables' scattered response for the connection as if it were unoccluded: its single
+    // The tables' scattered response for the connection as if it were unoccluded, at a
+    // receiver of normal n: its single
     // and multiple irradiance (the ratio scales the lit-medium estimate into multiple
     // scattering: the lit medium's visibility, single's estimate over the tables' single,
     // applied to the broad multiple-scattering lobe).
@@ -142,6 +143,10 @@ class BakeEstimator {
     // multiple through `ratio`.
     void add_lit_medium(const EmitterSample& s, const vec3& p, const vec3& n, float ratio,
                         CounterRng& rng, BakeCounters& counters, IrradianceParts& parts) const;
+    // trace_texel's lines for an occluded connection.
+    template <class Line>
+    void trace_occluded(const EmitterSample& s, const vec3& p, const vec3& n, const vec3& albedo,
+                        CounterRng& rng, Line& line) const;
     IrradianceParts volume_path(const vec3& p, const vec3& n, CounterRng& rng,
                                 BakeCounters& counters) const;
     // VPT's random walk from pos along dir: free flights, scattering in media (NEE, HG),

@@ -89,7 +89,7 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
                 // Summed sample by sample into the running total: the same additions in the
                 // same order whatever the split into passes.
                 for (int s = first; s < first + samples; ++s) {
-                    CounterRng rng(uint64_t(settings_.seed), mi, i, uint64_t(s));
+                    CounterRng rng = texel_random(settings_.seed, mi, i, s);
                     sums_[mi][i] += estimator_.estimate(t.position, t.normal, t.albedo, rng,
                                                         counters, &fixed_[mi][i]);
                 }
@@ -104,7 +104,7 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
     tbb::parallel_for(size_t(0), probe_positions_.size(), [&](size_t i) {
         BakeCounters counters;
         for (int s = first; s < first + samples; ++s) {
-            CounterRng rng(uint64_t(settings_.seed), maps_.size(), i, uint64_t(s));
+            CounterRng rng = texel_random(settings_.seed, maps_.size(), i, s);
             const BakeEstimator::ProbeParts p =
                 estimator_.estimate_probe(probe_positions_[i], rng, counters);
             bool finite = true;

@@ -73,6 +73,13 @@ class LightmapBaker {
     BakeStats stats_;
 };
 
+// The random numbers of sample `sample` of texel `texel` of lightmap `lightmap` (probes: lightmap
+// index = the number of lightmaps): the one key the bake, --debug-texel and the workbench's
+// texel trace share, so that a trace re-runs the bake's own paths.
+inline CounterRng texel_random(int seed, size_t lightmap, size_t texel, int sample) {
+    return CounterRng(uint64_t(seed), lightmap, texel, uint64_t(sample));
+}
+
 // The scene's lightmap name for file output: "<object name>" or "object<i>".
 std::string lightmap_name(const Scene& scene, const ObjectLightmap& map);
 

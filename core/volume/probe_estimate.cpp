@@ -133,6 +133,40 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
     return out;
 }
 
+template <class Line>
+void BakeEstimator::trace_occluded(const EmitterSample& s, const vec3& p, const vec3& n,
+                                   const vec3& albedo, CounterRng& rng, Line& line) const {
+    // The bake's own functions: the unoccluded response and the lit-medium estimate, the
+    // latter averaged over draws of its own so that the visibility it implies is readable.
+    BakeCounters counters;
+    const IrradianceParts unoccluded =
+        unoccluded_scatter(s, p, n, luminance(albedo), rng, counters);
+    const IrradianceParts facing =
+        unoccluded_scatter(s, p, s.dir, luminance(albedo), rng, counters);
+    constexpr int kDraws = 1024;
+    double sum = 0.0, sum2 = 0.0;
+    int in_medium = 0, lit = 0;
+    for (int i = 0; i < kDraws; ++i) {
+        const LitMediumSample one = lit_medium_single(s, p, n, rng, counters);
+        const double v = luminance(one.single);
+        sum += v, sum2 += v * v;
+        in_medium += one.in_medium, lit += one.lit;
+    }
+    const double mean = sum / kDraws;
+    const double se = std::sqrt(std::max(0.0, sum2 / kDraws - mean * mean) / kDraws);
+    const double table_single = luminance(unoccluded.single);
+    const float ratio = multiple_over_single(facing);
+    line("  occluded: the lit medium around the receiver (%d draws: %d in the medium, %d lit)",
+         kDraws, in_medium, lit);
+    line("    unoccluded tables: single %.5g, multiple %.5g", table_single,
+         double(luminance(unoccluded.multiple)));
+    line("    lit-medium single %.5g +- %.2g -> visibility of the lit medium %.3f", mean, se,
+         table_single > 0.0 ? mean / table_single : 0.0);
+    line("    contributions: single %.5g, multiple %.5g (x multiple/single %.3f of a receiver "
+         "facing the emitter)",
+         mean, mean * ratio, double(ratio));
+}
+
 std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n,
                                                     const vec3& albedo, CounterRng& rng) const {
     std::vector<std::string> lines;
@@ -168,6 +202,7 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
             m.sigma_a, m.g);
         line("  direct irradiance %.5g (x T for extinction, impulse and vpt)",
              double(luminance(s.irradiance)) * std::max(0.0f, cos_x));
+        if (!vis && scatters_) trace_occluded(s, p, n, albedo, rng, line);
         if (!tables_ || !(m.sigma_s > 0.0) || !vis) continue;
         ImpulseQuery q;
         q.emitter = s.kind;

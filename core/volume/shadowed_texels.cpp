@@ -84,9 +84,35 @@ RegionComparison compare_region(const LayerSet& test, const LayerSet& ref,
     const double test_s = inscatter(test), ref_s = inscatter(ref);
     r.test_irradiance = test_e / double(r.texels);
     r.ref_irradiance = ref_e / double(r.texels);
+    r.test_inscatter = test_s / double(r.texels);
+    r.ref_inscatter = ref_s / double(r.texels);
     r.irradiance_ratio = ref_e > 0.0 ? test_e / ref_e : nan;
     r.inscatter_ratio = ref_s > 0.0 ? test_s / ref_s : nan;
     return r;
+}
+
+RegionComparison combine_regions(const std::vector<RegionComparison>& parts) {
+    RegionComparison all;
+    double rel = 0.0, te = 0.0, re = 0.0, ts = 0.0, rs = 0.0;
+    for (const RegionComparison& p : parts) {
+        const double n = double(p.texels);
+        all.texels += p.texels;
+        rel += p.irradiance_relmse * n;
+        te += p.test_irradiance * n, re += p.ref_irradiance * n;
+        ts += p.test_inscatter * n, rs += p.ref_inscatter * n;
+    }
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    if (all.texels == 0) {
+        all.irradiance_ratio = all.inscatter_ratio = nan;
+        return all;
+    }
+    const double n = double(all.texels);
+    all.irradiance_relmse = rel / n;
+    all.test_irradiance = te / n, all.ref_irradiance = re / n;
+    all.test_inscatter = ts / n, all.ref_inscatter = rs / n;
+    all.irradiance_ratio = re > 0.0 ? te / re : nan;
+    all.inscatter_ratio = rs > 0.0 ? ts / rs : nan;
+    return all;
 }
 
 }  // namespace freqlab

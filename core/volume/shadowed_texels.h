@@ -40,8 +40,11 @@ struct RegionComparison {
     double irradiance_relmse = 0.0;
     double irradiance_ratio = 0.0, inscatter_ratio = 0.0;
     double test_irradiance = 0.0, ref_irradiance = 0.0;  // mean luminances over the region
+    double test_inscatter = 0.0, ref_inscatter = 0.0;
 };
 RegionComparison compare_region(const LayerSet& test, const LayerSet& ref,
                                 const std::vector<uint8_t>& only);
+// Several lightmaps' regions as one: texel-weighted relMSE, ratios of the summed means.
+RegionComparison combine_regions(const std::vector<RegionComparison>& parts);
 
 }  // namespace freqlab
