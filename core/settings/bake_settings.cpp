@@ -19,6 +19,12 @@ const SettingsSchema& BakeSettings::schema() {
                     "everywhere; albedo = that shift times the receiver's albedo (light the "
                     "surface itself reflects into the medium scales with it; a black receiver "
                     "gets none).")
+            .field(&BakeSettings::lit_medium_depth, "lit_medium_depth", -1, 16, "",
+                   kInvalidatesBake,
+                   "Impulse: up to which path vertex (0 = the texel itself) an occluded or "
+                   "below-horizon emitter connection still brings the light scattered by the lit "
+                   "medium around the vertex (one point along a cosine-sampled direction, 2 "
+                   "shadow rays); -1: none, as the seed (§5.2: unoccluded connections only).")
             .field(&BakeSettings::texel_density, "texel_density", 0.01, 4096, "texels/unit",
                    kInvalidatesBake, "Lightmap resolution: texels per scene unit.")
             .field(&BakeSettings::max_size, "max_size", 16, 8192, "texels", kInvalidatesBake,

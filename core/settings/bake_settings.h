@@ -18,6 +18,9 @@ struct BakeSettings {
     int bounces = 2;         // indirect surface bounces after the first vertex
     int media_bounces = 30;  // scattering events in media: 1 = single scattering only
     BackScatter back_scatter = BackScatter::Off;
+    // Impulse: path vertices (0 = the texel) whose occluded emitter connections get the light
+    // scattered by the lit medium around them; -1: none (the seed's §5.2).
+    int lit_medium_depth = 0;
     float texel_density = 16.0f;  // texels per scene unit
     int max_size = 1024;          // atlas side limit
     int padding = 2;              // gutter texels per chart

@@ -11,6 +11,7 @@ namespace freqlab {
 namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
+constexpr float kBelowHorizonKeep = 0.25f;
 
 // A direction whose cosine with `axis` follows HG(g): where light came from before it was
 // scattered into `axis`'s direction of travel reversed.
@@ -334,9 +335,17 @@ float BakeEstimator::multiple_over_single(const IrradianceParts& unoccluded) {
 void BakeEstimator::add_lit_medium(const EmitterSample& s, const vec3& p, const vec3& n,
                                    float ratio, CounterRng& rng, BakeCounters& counters,
                                    IrradianceParts& parts) const {
+    // Environment samples below the horizon are half of a uniform sky's and bring little on
+    // open ground (the medium they light lies beyond the ground's edge): Russian roulette,
+    // one in kBelowHorizonKeep kept and weighted up, so that they cost a quarter.
+    float weight = 1.0f;
+    if (!s.fixed && s.kind == EmitterKind::Directional && glm::dot(n, s.dir) <= 0.0f) {
+        if (rng.next_float() >= kBelowHorizonKeep) return;
+        weight = 1.0f / kBelowHorizonKeep;
+    }
     const LitMediumSample lit = lit_medium_single(s, p, n, rng, counters);
-    parts.single += lit.single;
-    if (settings_.media_bounces > 1) parts.multiple += lit.single * ratio;
+    parts.single += lit.single * weight;
+    if (settings_.media_bounces > 1) parts.multiple += lit.single * (ratio * weight);
 }
 
 BakeEstimator::LitMediumSample BakeEstimator::lit_medium_single(const EmitterSample& s,
@@ -443,14 +452,20 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     if (ratio_buffers.size() <= size_t(depth)) ratio_buffers.resize(size_t(depth) + 1);
     std::vector<float>& occluded = ratio_buffers[size_t(depth)];
     occluded.assign(local.size(), -1.0f);  // < 0: connected (or no lit-medium estimate)
+    // Up to bake.lit_medium_depth (the texel itself by default: deeper vertices' shadows reach
+    // it through a diffuse bounce, and cost as much).
+    const bool lit_here = scatters_ && depth <= settings_.lit_medium_depth;
+    float* want_ratio = nullptr;
     for (size_t i = 0; i < local.size(); ++i) {
         const EmitterSample& s = local[i];
         float ratio = 0.0f;
+        want_ratio = lit_here ? &ratio : nullptr;
         if (!fixed || !s.fixed) {
-            if (!direct_light(s, p, n, albedo_lum, rng, counters, parts, &ratio) && scatters_)
+            if (!direct_light(s, p, n, albedo_lum, rng, counters, parts, want_ratio) && lit_here)
                 occluded[i] = ratio;
         } else if (learn) {
-            if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, &ratio) && scatters_)
+            if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, want_ratio) &&
+                lit_here)
                 fixed->occluded.emplace_back(s.light, ratio);
         }
     }
