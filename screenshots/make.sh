@@ -37,3 +37,11 @@ shot bake_zh_lobes.png scenes/cornell_fog.json --method impulse --set bake.spp=1
      --set frame.width=480 --set frame.height=360 --inspect 150,335 --size 1280x800
 shot bake_split_vpt.png scenes/cornell_fog.json --method impulse --set bake.spp=64 \
      --set frame.width=480 --set frame.height=360 --compare --size 1280x900
+# Method B, light scattered into shadows: an umbra texel's trace (the lit medium's visibility and
+# both contributions of the occluded connection) and the analytic scene, impulse | VPT.
+shot bake_shadow_trace.png scenes/analytic/haze_occluder.json --method impulse --set bake.spp=256 \
+     --set bake.texel_density=8 --set bake.probes_x=0 --set frame.width=480 --set frame.height=360 \
+     --inspect 220,196 --size 1600x1000
+shot bake_haze_occluder_split.png scenes/analytic/haze_occluder.json --method impulse \
+     --set bake.spp=256 --set bake.texel_density=8 --set bake.probes_x=0 --set frame.width=480 \
+     --set frame.height=360 --compare --size 1280x900

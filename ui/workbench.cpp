@@ -270,7 +270,9 @@ Workbench::~Workbench() {
 
 void Workbench::draw(int fb_w, int fb_h) {
     State& s = *s_;
-    const float left_w = 320, right_w = 300, bottom_h = 130, menu_h = ImGui::GetFrameHeight();
+    // The inspector widens with the window (traces are long lines); 300 px at most window sizes.
+    const float left_w = 320, bottom_h = 130, menu_h = ImGui::GetFrameHeight();
+    const float right_w = std::max(300.0f, 0.3f * (float(fb_w) - left_w));
     const ImGuiWindowFlags fixed =
         ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse;
 

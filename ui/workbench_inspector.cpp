@@ -98,8 +98,11 @@ void draw_inspector(Workbench& wb, Workbench::State& s) {
     if (s.trace_point && s.trace_pixel == pick) draw_cone_samples(*s.trace_point);
     ImGui::TextDisabled("trace of this pixel's estimate");
     if (!s.trace_lines.empty() && s.trace_pixel == pick) {
-        ImGui::BeginChild("trace", ImVec2(0, 0), true, ImGuiWindowFlags_HorizontalScrollbar);
+        // Wrapped: a trace line is read whole (a scrollbar hid the values at their ends).
+        ImGui::BeginChild("trace", ImVec2(0, 0), true);
+        ImGui::PushTextWrapPos(0.0f);
         for (const std::string& l : s.trace_lines) ImGui::TextUnformatted(l.c_str());
+        ImGui::PopTextWrapPos();
         ImGui::EndChild();
     }
 }

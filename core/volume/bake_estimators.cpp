@@ -285,18 +285,14 @@ IrradianceParts BakeEstimator::estimate(const vec3& p, const vec3& n, const vec3
 
 bool BakeEstimator::direct_light(const EmitterSample& s, const vec3& p, const vec3& n,
                                  float albedo_lum, CounterRng& rng, BakeCounters& counters,
-                                 IrradianceParts& parts, float* occluded_ratio) const {
+                                 IrradianceParts& parts, vec3* occluded_multiple) const {
     const float cos_x = glm::dot(n, s.dir);
     // Below the horizon the segment to the emitter enters the receiver's own surface at once:
     // no ray is cast, and like an occluded one the connection brings no direct light; the
     // light scattered by the lit medium around the receiver is lit_medium_single's.
     if (cos_x <= 0.0f || !visible(p, n, s.dir, s.distance, counters)) {
-        // The ratio is that of a receiver facing the emitter: at the receiver's own
-        // orientation a lobe pointing away leaves single scattering at the ZH's ringing, and
-        // the ratio would explode (sun_haze at 4x density: multiple 4x VPT's).
-        if (scatters_ && occluded_ratio)
-            *occluded_ratio = multiple_over_single(
-                unoccluded_scatter(s, p, s.dir, albedo_lum, rng, counters));
+        if (scatters_ && occluded_multiple && settings_.media_bounces > 1)
+            *occluded_multiple = unoccluded_scatter(s, p, n, albedo_lum, rng, counters).multiple;
         return false;
     }
     SegmentOptics optics;
@@ -326,15 +322,9 @@ IrradianceParts BakeEstimator::unoccluded_scatter(const EmitterSample& s, const 
     return out;
 }
 
-float BakeEstimator::multiple_over_single(const IrradianceParts& unoccluded) {
-    // The response is the emitter's colour times a scalar per part: one ratio for all channels.
-    const float single = luminance(unoccluded.single);
-    return single > 0.0f ? luminance(unoccluded.multiple) / single : 0.0f;
-}
-
 void BakeEstimator::add_lit_medium(const EmitterSample& s, const vec3& p, const vec3& n,
-                                   float ratio, CounterRng& rng, BakeCounters& counters,
-                                   IrradianceParts& parts) const {
+                                   const vec3& unoccluded_multiple, CounterRng& rng,
+                                   BakeCounters& counters, IrradianceParts& parts) const {
     // Environment samples below the horizon are half of a uniform sky's and bring little on
     // open ground (the medium they light lies beyond the ground's edge): Russian roulette,
     // one in kBelowHorizonKeep kept and weighted up, so that they cost a quarter.
@@ -345,7 +335,12 @@ void BakeEstimator::add_lit_medium(const EmitterSample& s, const vec3& p, const 
     }
     const LitMediumSample lit = lit_medium_single(s, p, n, rng, counters);
     parts.single += lit.single * weight;
-    if (settings_.media_bounces > 1) parts.multiple += lit.single * (ratio * weight);
+    // Multiple scattering: the unoccluded response's where the point drawn is lit. Its mean
+    // is the lit fraction of the medium the receiver sees (weighted by the cosine and the
+    // transmittance), at most the unoccluded response: 0 in a closed gap, ~1/2 under a small
+    // occluder. (Scaling by single's lit-medium estimate over the tables' single instead
+    // diverged in thick media, where the tables' single is e^-12 and the real one is not.)
+    if (lit.lit) parts.multiple += unoccluded_multiple * weight;
 }
 
 BakeEstimator::LitMediumSample BakeEstimator::lit_medium_single(const EmitterSample& s,
@@ -448,25 +443,23 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     // Occluded connections' lit-medium estimates run after every connection is resolved, in
     // emitter order, whether or not the fixed lights were reused: the same random numbers
     // either way.
-    thread_local std::vector<std::vector<float>> ratio_buffers;
-    if (ratio_buffers.size() <= size_t(depth)) ratio_buffers.resize(size_t(depth) + 1);
-    std::vector<float>& occluded = ratio_buffers[size_t(depth)];
-    occluded.assign(local.size(), -1.0f);  // < 0: connected (or no lit-medium estimate)
+    thread_local std::vector<std::vector<OccludedConnection>> occluded_buffers;
+    if (occluded_buffers.size() <= size_t(depth)) occluded_buffers.resize(size_t(depth) + 1);
+    std::vector<OccludedConnection>& occluded = occluded_buffers[size_t(depth)];
+    occluded.assign(local.size(), OccludedConnection{});
     // Up to bake.lit_medium_depth (the texel itself by default: deeper vertices' shadows reach
     // it through a diffuse bounce, and cost as much).
     const bool lit_here = scatters_ && depth <= settings_.lit_medium_depth;
-    float* want_ratio = nullptr;
     for (size_t i = 0; i < local.size(); ++i) {
         const EmitterSample& s = local[i];
-        float ratio = 0.0f;
-        want_ratio = lit_here ? &ratio : nullptr;
+        vec3 multiple(0.0f);
+        vec3* want = lit_here ? &multiple : nullptr;
         if (!fixed || !s.fixed) {
-            if (!direct_light(s, p, n, albedo_lum, rng, counters, parts, want_ratio) && lit_here)
-                occluded[i] = ratio;
+            if (!direct_light(s, p, n, albedo_lum, rng, counters, parts, want) && lit_here)
+                occluded[i] = {true, multiple};
         } else if (learn) {
-            if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, want_ratio) &&
-                lit_here)
-                fixed->occluded.emplace_back(s.light, ratio);
+            if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, want) && lit_here)
+                fixed->occluded.emplace_back(s.light, multiple);
         }
     }
     if (fixed) {
@@ -475,12 +468,13 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
             fixed->parts = fixed_parts;
         }
         parts += fixed->parts;
-        for (const auto& [light, ratio] : fixed->occluded)
+        for (const auto& [light, multiple] : fixed->occluded)
             for (size_t i = 0; i < local.size(); ++i)
-                if (local[i].light == light && local[i].fixed) occluded[i] = ratio;
+                if (local[i].light == light && local[i].fixed) occluded[i] = {true, multiple};
     }
     for (size_t i = 0; i < local.size(); ++i)
-        if (occluded[i] >= 0.0f) add_lit_medium(local[i], p, n, occluded[i], rng, counters, parts);
+        if (occluded[i].occluded)
+            add_lit_medium(local[i], p, n, occluded[i].multiple, rng, counters, parts);
     buffers[size_t(depth)] = std::move(local);
     if (depth >= settings_.bounces) return parts;
     // One indirect segment, cosine-sampled: irradiance = pi x radiance on average.

@@ -70,9 +70,9 @@ class BakeEstimator {
         bool known = false;
         IrradianceParts parts;
         // Impulse: the point and directional lights whose connection is occluded, with the
-        // multiple-to-single ratio of their unoccluded response; their lit-medium estimate
+        // multiple scattering of their unoccluded response; their lit-medium estimate
         // (lit_medium_single) draws random numbers, so it runs on every path.
-        std::vector<std::pair<int, float>> occluded;
+        std::vector<std::pair<int, vec3>> occluded;
     };
     // Irradiance at p (normal n, albedo of the receiver for back-scatter): one path. `fixed`,
     // when given, is this point's FixedDirect, filled by the first call.
@@ -117,6 +117,10 @@ class BakeEstimator {
         bool lit = false;   // it sees the emitter and the receiver
         vec3 single{0.0f};  // the irradiance estimate
     };
+    struct OccludedConnection {
+        bool occluded = false;
+        vec3 multiple{0.0f};  // the unoccluded response's multiple scattering
+    };
     LitMediumSample lit_medium_single(const EmitterSample& s, const vec3& p, const vec3& n,
                                       CounterRng& rng, BakeCounters& counters) const;
     // The tables' scattered response for the connection as if it were unoccluded, at a
@@ -127,7 +131,6 @@ class BakeEstimator {
     IrradianceParts unoccluded_scatter(const EmitterSample& s, const vec3& p, const vec3& n,
                                        float albedo_lum, CounterRng& rng,
                                        BakeCounters& counters) const;
-    static float multiple_over_single(const IrradianceParts& unoccluded);
     void sample_emitters(const vec3& p, CounterRng& rng, std::vector<EmitterSample>& out) const;
     IrradianceParts surface_path(const vec3& p, const vec3& n, const vec3& albedo, int depth,
                                  CounterRng& rng, BakeCounters& counters,
@@ -135,14 +138,15 @@ class BakeEstimator {
     // Direct light of one emitter sample at (p, n): visibility, transmittance and, for impulse,
     // its scattered response, added to parts.
     // Returns false when the connection is occluded or below the horizon; then, for impulse,
-    // *occluded_ratio (when given) is multiple_over_single of its unoccluded response.
+    // *occluded_multiple (when given) is the multiple scattering of its unoccluded response.
     bool direct_light(const EmitterSample& s, const vec3& p, const vec3& n, float albedo_lum,
                       CounterRng& rng, BakeCounters& counters, IrradianceParts& parts,
-                      float* occluded_ratio = nullptr) const;
-    // The lit-medium estimate of an occluded connection, added to parts: single, and
-    // multiple through `ratio`.
-    void add_lit_medium(const EmitterSample& s, const vec3& p, const vec3& n, float ratio,
-                        CounterRng& rng, BakeCounters& counters, IrradianceParts& parts) const;
+                      vec3* occluded_multiple = nullptr) const;
+    // The lit-medium estimate of an occluded connection, added to parts: its single
+    // scattering, and the unoccluded multiple scattering where its point is lit.
+    void add_lit_medium(const EmitterSample& s, const vec3& p, const vec3& n,
+                        const vec3& unoccluded_multiple, CounterRng& rng, BakeCounters& counters,
+                        IrradianceParts& parts) const;
     // trace_texel's lines for an occluded connection.
     template <class Line>
     void trace_occluded(const EmitterSample& s, const vec3& p, const vec3& n, const vec3& albedo,

@@ -141,8 +141,6 @@ void BakeEstimator::trace_occluded(const EmitterSample& s, const vec3& p, const 
     BakeCounters counters;
     const IrradianceParts unoccluded =
         unoccluded_scatter(s, p, n, luminance(albedo), rng, counters);
-    const IrradianceParts facing =
-        unoccluded_scatter(s, p, s.dir, luminance(albedo), rng, counters);
     constexpr int kDraws = 1024;
     double sum = 0.0, sum2 = 0.0;
     int in_medium = 0, lit = 0;
@@ -155,16 +153,16 @@ void BakeEstimator::trace_occluded(const EmitterSample& s, const vec3& p, const 
     const double mean = sum / kDraws;
     const double se = std::sqrt(std::max(0.0, sum2 / kDraws - mean * mean) / kDraws);
     const double table_single = luminance(unoccluded.single);
-    const float ratio = multiple_over_single(facing);
     line("  occluded: the lit medium around the receiver (%d draws: %d in the medium, %d lit)",
          kDraws, in_medium, lit);
     line("    unoccluded tables: single %.5g, multiple %.5g", table_single,
          double(luminance(unoccluded.multiple)));
     line("    lit-medium single %.5g +- %.2g -> visibility of the lit medium %.3f", mean, se,
          table_single > 0.0 ? mean / table_single : 0.0);
-    line("    contributions: single %.5g, multiple %.5g (x multiple/single %.3f of a receiver "
-         "facing the emitter)",
-         mean, mean * ratio, double(ratio));
+    line(
+        "    contributions: single %.5g, multiple %.5g (the unoccluded multiple x the lit "
+        "fraction %.3f)",
+        mean, double(luminance(unoccluded.multiple)) * lit / kDraws, double(lit) / kDraws);
 }
 
 std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n,
