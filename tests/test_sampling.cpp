@@ -267,3 +267,76 @@ TEST(Sampling, FastAtan2IsAsAccurateAsTheFloatLibrary) {
     EXPECT_NEAR(fast_atan2(-1.0f, 0.0f), -M_PI / 2, 1e-7);
     EXPECT_NEAR(fast_atan2(-1.0f, -1.0f), -3 * M_PI / 4, 1e-7);
 }
+
+// The media samplers shared by method B's bakers and VPT (math/sampling.h): histograms of many
+// samples against the bin integrals of their own pdfs (pbrt-v4's media_test.cpp style).
+namespace {
+
+template <class Sample, class Pdf>
+double samples_against_pdf(Sample sample, Pdf pdf, double lo, double hi, int bins) {
+    std::vector<double> observed(size_t(bins), 0.0), expected(size_t(bins), 0.0);
+    const int n = 200000;
+    CounterRng rng(9, 1, 2, 3);
+    for (int i = 0; i < n; ++i) {
+        const double x = sample(rng.next_double());
+        const int b = int((x - lo) / (hi - lo) * bins);
+        if (b >= 0 && b < bins) observed[size_t(b)] += 1.0;
+    }
+    for (int b = 0; b < bins; ++b) {
+        const double a = lo + (hi - lo) * b / bins, c = lo + (hi - lo) * (b + 1) / bins;
+        expected[size_t(b)] = n * gauss<double, 20>::integrate(pdf, a, c);
+    }
+    double chi2;
+    const double p = test::chi_square_p_value(observed, expected, &chi2);
+    EXPECT_GT(p, 1e-3) << "chi2 = " << chi2;
+    return p;
+}
+
+}  // namespace
+
+TEST(Sampling, HenyeyGreensteinCosinesFollowThePhaseFunction) {
+    for (float g : {-0.7f, -0.2f, 0.0f, 0.3f, 0.5f, 0.9f}) {
+        SCOPED_TRACE(g);
+        samples_against_pdf([&](double u) { return double(sample_hg_cos(g, float(u))); },
+                            [&](double c) { return 2 * M_PI * hg_phase(g, c); }, -1.0, 1.0, 64);
+        // The phase function integrates to one over the sphere.
+        double total = 0.0;
+        for (int k = 0; k < 64; ++k)
+            total += gauss<double, 20>::integrate([&](double c) { return hg_phase(g, c); },
+                                                  -1.0 + k / 32.0, -1.0 + (k + 1) / 32.0);
+        EXPECT_NEAR(total * 2 * M_PI, 1.0, 1e-6);
+    }
+}
+
+TEST(Sampling, EquiangularDistancesFollowTheirPdf) {
+    struct Case {
+        double delta, h, t0, t1;
+    };
+    for (const Case& c : {Case{0.5, 0.2, 0.0, 3.0}, Case{-1.0, 0.7, 0.0, 2.0},
+                          Case{4.0, 0.05, 0.0, 5.0}, Case{1.0, 1.0, 0.5, 1.5}}) {
+        SCOPED_TRACE(c.delta);
+        samples_against_pdf(
+            [&](double u) {
+                EquiangularSample s;
+                EXPECT_TRUE(sample_equiangular(c.delta, c.h, c.t0, c.t1, u, &s));
+                EXPECT_NEAR(s.pdf, equiangular_pdf(c.delta, c.h, c.t0, c.t1, s.t), 1e-9 * s.pdf);
+                return s.t;
+            },
+            [&](double t) { return equiangular_pdf(c.delta, c.h, c.t0, c.t1, t); }, c.t0, c.t1, 48);
+    }
+}
+
+TEST(Sampling, TruncatedExponentialDistancesFollowTheirPdf) {
+    for (double sigma : {0.1, 1.0, 7.0}) {
+        SCOPED_TRACE(sigma);
+        const double t_end = 2.0;
+        const double mass = -std::expm1(-sigma * t_end);
+        samples_against_pdf(
+            [&](double u) {
+                const TruncatedExponentialSample s = sample_truncated_exponential(sigma, t_end, u);
+                EXPECT_NEAR(s.pdf, sigma * std::exp(-sigma * s.t) / mass, 1e-9 * s.pdf);
+                return s.t;
+            },
+            [&](double t) { return sigma * std::exp(-sigma * t) / mass; }, 0.0, t_end, 40);
+    }
+}
