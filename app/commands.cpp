@@ -94,6 +94,16 @@ int run_render(const RenderArgs& args) {
         config.frame.width = w, config.frame.height = h;
     }
     if (args.spp > 0) {
+        // Method A's points / sparse / cache choose every radiance point's sample count
+        // themselves (N_Omega); --spp used to set gbuffer.aa_samples for them, and did nothing.
+        const bool adaptive = config.method == RenderMethod::Points ||
+                              config.method == RenderMethod::Sparse ||
+                              config.method == RenderMethod::Cache;
+        if (adaptive)
+            throw Error("--spp", std::to_string(args.spp),
+                        std::string("method ") + args.method +
+                            " chooses its sample counts per radiance point (N_Omega); set "
+                            "gbuffer.aa_samples or points.* with --set");
         const char* key = config.method == RenderMethod::Mis         ? "mis.spp"
                           : config.method == RenderMethod::Reference ? "reference.spp"
                                                                      : "gbuffer.aa_samples";

@@ -8,6 +8,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include "bake_fixture.h"
 #include "math/sh.h"
 #include "scene/scene_loader.h"
 #include "shared_tables.h"
@@ -18,17 +19,7 @@ using namespace freqlab;
 
 namespace {
 
-struct Fixture {
-    Scene scene;
-    Media media;
-    EmbreeDevice device{2};
-    std::unique_ptr<RayScene> rays;
-    explicit Fixture(const std::string& text) : scene(parse_scene(text, "test.json", "")) {
-        media = Media(scene.media);
-        rays = std::make_unique<RayScene>(scene, device);
-        rays->update(0.0f);
-    }
-};
+using Fixture = test_support::BakeFixture;
 
 std::string receiver_scene(const std::string& albedo, const std::string& media) {
     return R"({"frames": 1, "camera": {"position": [0, -5, 3], "look_at": [0, 0, 0]},

@@ -10,6 +10,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include "bake_fixture.h"
 #include "scene/scene_loader.h"
 #include "shared_tables.h"
 #include "volume/lightmap_baker.h"
@@ -19,17 +20,7 @@ using namespace freqlab;
 
 namespace {
 
-struct Fixture {
-    Scene scene;
-    Media media;
-    EmbreeDevice device{2};
-    std::unique_ptr<RayScene> rays;
-    explicit Fixture(const std::string& text) : scene(parse_scene(text, "test.json", "")) {
-        media = Media(scene.media);
-        rays = std::make_unique<RayScene>(scene, device);
-        rays->update(0.0f);
-    }
-};
+using Fixture = test_support::BakeFixture;
 
 // The analytic scene scenes/analytic/haze_occluder.json with the light given.
 std::string occluder_in_haze(const std::string& light) {

@@ -115,6 +115,16 @@ void start_env_bandwidth_job(Workbench::State& s) {
     });
 }
 
+// What a settings change invalidates, acted on once for the panel and apply_setting(): a
+// change to the G-buffer, the shading or method A's cache (a cache.* key) re-renders, anything
+// else redraws. (apply_setting ignored cache.* changes while the panel restarted on them.)
+void apply_render_invalidation(Workbench::State& s, uint32_t flags) {
+    if (flags & (kInvalidatesGBuffer | kInvalidatesShading | kInvalidatesCache))
+        restart_renderer(s);
+    else if (flags != 0)
+        s.view_dirty = true;
+}
+
 void draw_settings_panel(Workbench::State& s) {
     ImGui::Text("scene: %s", s.scene.name.c_str());
     if (s.bake) {
@@ -139,11 +149,7 @@ void draw_settings_panel(Workbench::State& s) {
             "gbuffer: primary rays only; mis: MIS direct lighting at mis.spp; "
             "reference: the same at reference.spp (cached on disk)");
     SettingsGroup group = s.config.settings_group();
-    const uint32_t changed = draw_settings(group, !s.options.show_tables);
-    if (changed & (kInvalidatesGBuffer | kInvalidatesShading | kInvalidatesCache))
-        restart_renderer(s);
-    else if (changed & kInvalidatesDisplay)
-        s.view_dirty = true;
+    apply_render_invalidation(s, draw_settings(group, !s.options.show_tables));
 
     draw_compare_panel(s);
     draw_tables_panel(*s.tables);
@@ -363,11 +369,8 @@ bool Workbench::set_layer(const std::string& name) {
 void Workbench::apply_setting(const std::string& assignment) {
     if (s_->bake && assignment.rfind("bake.", 0) == 0) return apply_bake_setting(*s_, assignment);
     SettingsGroup group = s_->config.settings_group();
-    const uint32_t flags = group.apply_assignment(assignment, "workbench");
-    if (flags & (kInvalidatesGBuffer | kInvalidatesShading))
-        restart_renderer(*s_);
-    else
-        s_->view_dirty = true;
+    apply_render_invalidation(
+        *s_, group.apply_assignment(assignment, "workbench") | kInvalidatesDisplay);
 }
 
 bool Workbench::frame_shown() const {

@@ -158,6 +158,7 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
         stages["radiance_points"] = ms_since(t0);
         rays += out.rays;
         guarded = out.nonfinite;
+        sparse_stats["pixels_shaded"] = out.pixels_shaded;
     } else if (config_.method == RenderMethod::Sparse || config_.method == RenderMethod::Cache) {
         const bool use_cache = config_.method == RenderMethod::Cache;
         bool reset = false;

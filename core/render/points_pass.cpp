@@ -106,7 +106,7 @@ PointsPassOutput render_points(const RayScene& scene, const GBuffer& gb, int fra
         nonfinite.fetch_add(task_bad, std::memory_order_relaxed);
         progress.advance();
     });
-    return PointsPassOutput{rays.load(), nonfinite.load()};
+    return PointsPassOutput{rays.load(), nonfinite.load(), long(bw) * long(bh)};
 }
 
 }  // namespace freqlab

@@ -14,6 +14,7 @@ namespace freqlab {
 struct PointsPassOutput {
     long rays = 0;
     long nonfinite = 0;
+    long pixels_shaded = 0;  // pixels a radiance point was computed at (one per stride block)
 };
 
 // The layers written, in order (after `color` and `variance`).

@@ -442,3 +442,27 @@ TEST(GlWorkbench, OpenSceneKeepsMethodAndSettings) {
     EXPECT_EQ(wb.layers()->width(), 160);  // frame.width=160 of small_scene stayed
     EXPECT_NE(wb.layers()->find("depth"), nullptr);
 }
+
+// A cache.* setting applied from outside the panel (sessions, scripts) re-renders like the
+// panel does: it used to only redraw, so the frame kept the old cache's decisions.
+TEST(GlWorkbench, ApplySettingRerendersOnACacheSetting) {
+    GlSession gl;
+    WorkbenchOptions o = small_scene("decision");
+    o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/rotor.json";
+    o.method = "cache";
+    o.frame = 2;
+    o.warm_from = 0;
+    Workbench wb(o);
+    run_until_shown(gl, wb);
+    ASSERT_NE(wb.layers(), nullptr);
+    const std::vector<float> before = wb.layers()->get("decision").data;
+    long reused = 0;
+    for (float d : before) reused += d == 1.0f;  // decision 1: reused from the cache
+    ASSERT_GT(reused, 0) << "frame 2 after 0 and 1 reuses some radiance points";
+    wb.apply_setting("cache.q_eps_x=0.5");
+    EXPECT_FALSE(wb.frame_shown());
+    run_until_shown(gl, wb);
+    const std::vector<float> after = wb.layers()->get("decision").data;
+    ASSERT_EQ(after.size(), before.size());
+    EXPECT_NE(after, before) << "the frame was not rendered again with the new cache setting";
+}
