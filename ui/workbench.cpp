@@ -102,9 +102,11 @@ void start_env_bandwidth_job(Workbench::State& s) {
         const EnvironmentMap& env = *sp->scene.environment();
         const EnvBandwidthHierarchy h = EnvBandwidthHierarchy::cached(env);
         auto result = std::make_unique<FrameResult>();
-        result->frame = -100;  // not a frame of the animation
+        result->frame = -1;
+        result->environment_view = true;
         result->layers = bandwidth_layers(env, h, 1024);
-        result->stats = {{"frame", -100},
+        result->stats = {{"frame", -1},
+                         {"environment_view", true},
                          {"time_ms", 0.0},
                          {"rays", 0},
                          {"levels", h.levels().size()},
@@ -376,7 +378,7 @@ void Workbench::apply_setting(const std::string& assignment) {
 bool Workbench::frame_shown() const {
     // A bake is shown once its last pass is (earlier passes are progressive previews).
     if (bake_busy(*s_)) return !s_->error.empty();
-    const bool env_view = s_->show_env_bandwidth && s_->shown && s_->shown->frame == -100;
+    const bool env_view = s_->show_env_bandwidth && s_->shown && s_->shown->environment_view;
     return (s_->shown && (s_->shown->frame == s_->frame || env_view) && !s_->view_dirty) ||
            !s_->error.empty();
 }

@@ -49,6 +49,9 @@ struct RenderConfig {
 
 struct FrameResult {
     int frame = 0;
+    // Not a frame of the animation but the environment's bandwidth hierarchy (the workbench's
+    // environment view); `frame` is then -1.
+    bool environment_view = false;
     float time_s = 0.0f;
     LayerSet layers;
     nlohmann::json stats;  // frame, time_s, time_ms, stages, rays, pixels_*, nonfinite
