@@ -446,10 +446,10 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     thread_local std::vector<std::vector<OccludedConnection>> occluded_buffers;
     if (occluded_buffers.size() <= size_t(depth)) occluded_buffers.resize(size_t(depth) + 1);
     std::vector<OccludedConnection>& occluded = occluded_buffers[size_t(depth)];
-    occluded.assign(local.size(), OccludedConnection{});
     // Up to bake.lit_medium_depth (the texel itself by default: deeper vertices' shadows reach
     // it through a diffuse bounce, and cost as much).
     const bool lit_here = scatters_ && depth <= settings_.lit_medium_depth;
+    occluded.assign(lit_here ? local.size() : 0, OccludedConnection{});
     for (size_t i = 0; i < local.size(); ++i) {
         const EmitterSample& s = local[i];
         vec3 multiple(0.0f);
@@ -472,7 +472,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
             for (size_t i = 0; i < local.size(); ++i)
                 if (local[i].light == light && local[i].fixed) occluded[i] = {true, multiple};
     }
-    for (size_t i = 0; i < local.size(); ++i)
+    for (size_t i = 0; i < occluded.size(); ++i)
         if (occluded[i].occluded)
             add_lit_medium(local[i], p, n, occluded[i].multiple, rng, counters, parts);
     buffers[size_t(depth)] = std::move(local);
