@@ -355,7 +355,6 @@ BakeEstimator::LitMediumSample BakeEstimator::lit_medium_single(const EmitterSam
     if (local_dir.z <= 1e-6f) return r;
     const vec3 w = Frame(n).to_world(local_dir);
     const vec3 o = origin(p, n);
-    r.w = w;
     // The part of w's ray that can scatter: to the media's exit or, in a medium filling all
     // space, to the first surface (then nothing lies between p and the point).
     double t_end = media_.exit_distance(o, w);
@@ -398,7 +397,6 @@ BakeEstimator::LitMediumSample BakeEstimator::lit_medium_single(const EmitterSam
     const HomogeneousMedium here = media_.at(x);
     if (!(here.sigma_s > 0.0)) return r;
     r.in_medium = true;
-    r.t = t;
     vec3 l = s.dir;
     double dist = kInfinity;
     vec3 strength = s.irradiance;  // what reaches x from the emitter before the medium

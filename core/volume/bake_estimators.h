@@ -112,10 +112,8 @@ class BakeEstimator {
     // scattering through the real (heterogeneous, bounded) media and geometry.
     struct LitMediumSample {
         bool in_medium = false;  // a point was drawn inside the media
-        double t = 0.0;          // its distance from p along w
-        vec3 w{0.0f};
-        bool lit = false;   // it sees the emitter and the receiver
-        vec3 single{0.0f};  // the irradiance estimate
+        bool lit = false;        // it sees the emitter and the receiver
+        vec3 single{0.0f};       // the irradiance estimate
     };
     struct OccludedConnection {
         bool occluded = false;
