@@ -128,7 +128,7 @@ int run_bench_cache(const BenchArgs& a) {
                     moving[i] = 1;
                     return;
                 }
-                const uint8_t m = key_light_mask(rs, keys, hit.position, hit.shading_normal);
+                const uint8_t m = key_light_mask(rs, keys, hit.position, hit.geometric_normal);
                 lit_any[i] |= m;
                 lit_all[i] &= m;
             });

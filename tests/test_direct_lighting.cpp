@@ -254,3 +254,10 @@ TEST(DirectLighting, StratifiedSamplesAreUnbiasedAndSpreadLess) {
         EXPECT_LT(variance[1], c.max_variance_ratio * variance[0]) << c.what;
     }
 }
+
+TEST(DirectLighting, MethodARayOffsetDefaultsToTheOneSpawnRule) {
+    // Method A's shading.ray_epsilon is the spawn rule's epsilon unless the user sets it.
+    EXPECT_EQ(ShadingSettings{}.ray_epsilon, kRayEpsilon);
+    const vec3 p(10.0f, -3.0f, 2.0f), n(0.0f, 0.0f, 1.0f);
+    EXPECT_FLOAT_EQ(spawn_point(p, n).z, 2.0f + 10.0f * kRayEpsilon);
+}

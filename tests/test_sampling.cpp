@@ -340,3 +340,87 @@ TEST(Sampling, TruncatedExponentialDistancesFollowTheirPdf) {
             [&](double t) { return sigma * std::exp(-sigma * t) / mass; }, 0.0, t_end, 40);
     }
 }
+
+TEST(Sampling, HenyeyGreensteinDirectionsAreThePhaseFunctionAboutTheirAxis) {
+    // sample_hg_direction's cosine with the axis follows HG (chi-square in cos), its azimuth
+    // about the axis is uniform (chi-square in phi), and it is a unit vector.
+    const vec3 axis = glm::normalize(vec3(0.3f, -0.5f, 0.8f));
+    const Frame frame(axis);
+    for (float g : {-0.6f, 0.0f, 0.8f}) {
+        SCOPED_TRACE(g);
+        CounterRng rng(17, 3, 0, 0);
+        const int n = 200000, bins = 32;
+        std::vector<double> cos_obs(bins, 0.0), cos_exp(bins, 0.0), phi_obs(bins, 0.0),
+            phi_exp(bins, n / double(bins));
+        for (int i = 0; i < n; ++i) {
+            const vec3 d = sample_hg_direction(g, axis, rng.next_float(), rng.next_float());
+            ASSERT_NEAR(glm::length(d), 1.0f, 1e-5f);
+            const vec3 l = frame.to_local(d);
+            const int cb = std::clamp(int((l.z + 1.0f) * 0.5f * bins), 0, bins - 1);
+            const double phi = std::atan2(double(l.y), double(l.x)) + M_PI;
+            const int pb = std::clamp(int(phi / (2 * M_PI) * bins), 0, bins - 1);
+            cos_obs[size_t(cb)] += 1;
+            phi_obs[size_t(pb)] += 1;
+        }
+        for (int b = 0; b < bins; ++b)
+            cos_exp[size_t(b)] = n * gauss<double, 20>::integrate(
+                                         [&](double c) { return 2 * M_PI * hg_phase(g, c); },
+                                         -1.0 + 2.0 * b / bins, -1.0 + 2.0 * (b + 1) / bins);
+        double chi2;
+        EXPECT_GT(test::chi_square_p_value(cos_obs, cos_exp, &chi2), 1e-3) << "cos chi2 " << chi2;
+        EXPECT_GT(test::chi_square_p_value(phi_obs, phi_exp, &chi2), 1e-3) << "phi chi2 " << chi2;
+    }
+}
+
+TEST(Sampling, LightSamplesGiveTheClosedFormIrradiance) {
+    // A point light: I / d^2 exactly, towards it.
+    Light point;
+    point.type = LightType::Point;
+    point.position = vec3(1, 2, 3);
+    point.intensity = vec3(5.0f);
+    const LightSample ps = sample_light(point, vec3(1, 2, 1), vec2(0.3f));
+    ASSERT_TRUE(ps.valid);
+    EXPECT_FLOAT_EQ(ps.distance, 2.0f);
+    EXPECT_FLOAT_EQ(ps.irradiance.x, 5.0f / 4.0f);
+    EXPECT_FLOAT_EQ(ps.direction.z, 1.0f);
+    EXPECT_FALSE(sample_light(point, point.position, vec2(0.0f)).valid);
+    // A directional light: its irradiance, against its direction of travel, unbounded.
+    Light sun;
+    sun.type = LightType::Directional;
+    sun.direction = vec3(0, 0, -1);
+    sun.intensity = vec3(3.0f);
+    const LightSample ds = sample_light(sun, vec3(0.0f), vec2(0.0f));
+    EXPECT_TRUE(ds.valid && std::isinf(ds.distance) && ds.direction.z == 1.0f);
+    EXPECT_FLOAT_EQ(ds.irradiance.y, 3.0f);
+    // A square quad of radiance L at height h, facing down, over a receiver facing up below a
+    // corner: the mean of irradiance x cos over uniform samples is pi L times the
+    // differential-area-to-parallel-rectangle form factor (closed form), within 4 standard errors.
+    const double a = 1.5, b = 0.8, h = 0.7, L = 2.0;
+    Light quad;
+    quad.type = LightType::Quad;
+    quad.corner = vec3(0, 0, float(h));
+    quad.edge_u = vec3(0, float(b), 0);  // edge_u x edge_v = -z: emits downwards
+    quad.edge_v = vec3(float(a), 0, 0);
+    quad.intensity = vec3(float(L));
+    const double A = a / h, B = b / h;
+    const double form = (A / std::sqrt(1 + A * A) * std::atan(B / std::sqrt(1 + A * A)) +
+                         B / std::sqrt(1 + B * B) * std::atan(A / std::sqrt(1 + B * B))) /
+                        (2 * M_PI);
+    const double expected = M_PI * L * form;
+    CounterRng rng(5, 9, 0, 0);
+    const int n = 400000;
+    double sum = 0, sum2 = 0;
+    for (int i = 0; i < n; ++i) {
+        const LightSample s =
+            sample_light(quad, vec3(0.0f), vec2(rng.next_float(), rng.next_float()));
+        ASSERT_TRUE(s.valid);
+        const double e = double(s.irradiance.x) * s.direction.z;
+        sum += e;
+        sum2 += e * e;
+    }
+    const double mean = sum / n, se = std::sqrt((sum2 / n - mean * mean) / n);
+    EXPECT_NEAR(mean, expected, 4 * se) << "se " << se;
+    EXPECT_LT(se, 0.01 * expected);
+    // The back of the quad receives nothing.
+    EXPECT_FALSE(sample_light(quad, vec3(0.5f, 0.5f, float(h) + 1.0f), vec2(0.5f)).valid);
+}

@@ -8,6 +8,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -47,14 +48,25 @@ struct Ray {
     float tfar = INFINITY;
 };
 
-// Where a ray leaving the surface point p (normal n, on the side the ray leaves) starts: p
-// moved off the surface by 2e-4 x max(1, |p|_inf), relative so that float rounding of the
-// hit position (~1e-7 |p|) never puts it back behind the surface. The bakers, VPT and the
-// shadow masks use it.
-inline vec3 spawn_point(const vec3& p, const vec3& n) {
+// The one ray-offset rule (method A, the bakers, VPT, the key-light and shadow masks): a ray
+// leaving the surface point p (normal n, on the side the ray leaves) starts at p moved off the
+// surface by epsilon x max(1, |p|_inf), relative so that float rounding of the hit position
+// (~1e-7 |p|) never puts it back behind the surface. Method A reads epsilon from
+// shading.ray_epsilon (default kRayEpsilon); everything else uses kRayEpsilon.
+constexpr float kRayEpsilon = 1e-4f;
+inline vec3 spawn_point(const vec3& p, const vec3& n, float epsilon = kRayEpsilon) {
     const float scale =
         std::max(1.0f, std::max(std::abs(p.x), std::max(std::abs(p.y), std::abs(p.z))));
-    return p + n * (2e-4f * scale);
+    return p + n * (epsilon * scale);
+}
+// A shadow ray from `origin` along unit `direction` to a point `distance` away, stopping
+// kShadowRayShortening of the way short so the light's own surface (a quad, a surface vertex)
+// does not occlude it; an infinite distance (a distant light) is unbounded.
+constexpr float kShadowRayShortening = 1e-4f;
+inline Ray shadow_ray(const vec3& origin, const vec3& direction, double distance) {
+    return Ray{
+        origin, direction, 0.0f,
+        std::isfinite(distance) ? float(distance) * (1.0f - kShadowRayShortening) : INFINITY};
 }
 
 class RayScene {

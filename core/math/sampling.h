@@ -69,6 +69,14 @@ inline float sample_hg_cos(float g, float u) {
     const float s = (1.0f - g * g) / (1.0f - g + 2.0f * g * u);
     return std::clamp((1.0f + g * g - s * s) / (2.0f * g), -1.0f, 1.0f);
 }
+// A direction whose cosine with `axis` follows HG(g): where light came from before it was
+// scattered into `axis`'s direction of travel reversed.
+inline vec3 sample_hg_direction(float g, const vec3& axis, float u1, float u2) {
+    const float cos_t = sample_hg_cos(g, u1);
+    const float sin_t = std::sqrt(std::max(0.0f, 1.0f - cos_t * cos_t));
+    const float phi = kTwoPi * u2;
+    return Frame(axis).to_world(vec3(sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t));
+}
 
 // Equiangular sampling of a distance t in [t0, t1] along a ray for a point at signed distance
 // `delta` along it (closest approach) and `h` > 0 from it: pdf(t) = h / ((b - a) r(t)^2),

@@ -68,10 +68,6 @@ Scratch& scratch() {
     return s;
 }
 
-float max_abs_component(const vec3& p) {
-    return std::max(std::fabs(p.x), std::max(std::fabs(p.y), std::fabs(p.z)));
-}
-
 // Sample variance of the luminance of `units`, divided by their count (variance of the mean).
 // Two passes (mean, then squared deviations): no division in the loop (Welford's running
 // mean divided per unit, a chain of divisions profiled at 3.5 % of a 16-spp pixel).
@@ -95,11 +91,11 @@ DirectLighting::DirectLighting(const RayScene& scene, const ShadingSettings& set
     : scene_(scene), environment_(scene.environment()), settings_(settings), sequence_(sequence) {
     for (const Light& l : scene.scene().lights)
         if (!l.environment) lights_.push_back(&l);
-    for (const Light* l : lights_) quad_lights_ = quad_lights_ || l->type == LightType::Quad;
+    for (const Light* l : lights_) quad_lights_ = quad_lights_ || light_sample_dimensions(*l) > 0;
 }
 
 vec3 DirectLighting::offset_origin(const vec3& p, const vec3& n) const {
-    return p + n * (settings_.ray_epsilon * std::max(1.0f, max_abs_component(p)));
+    return spawn_point(p, n, settings_.ray_epsilon);
 }
 
 ShadingPoint DirectLighting::shading_point(const SurfaceHit& hit, const vec3& wo) const {
@@ -216,7 +212,7 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
                 environment_->prefetch_alias(u);
             }
             for (const Light* l : lights_)
-                if (l->type == LightType::Quad) {
+                if (light_sample_dimensions(*l) == 2) {
                     const float u1 = rng.next_float(), u2 = rng.next_float();
                     s.light_u.emplace_back(u1, u2);
                 }
@@ -278,33 +274,14 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
                       e.radiance[size_t(i)] * albedo * e.factor[size_t(i)], i, e.pdf[size_t(i)],
                       e.other_pdf[size_t(i)], e.weight[size_t(i)]);
         for (const Light* l : lights_) {
-            vec3 dir, value;
-            float dist = INFINITY;
-            if (l->type == LightType::Point) {
-                const vec3 d = l->position - sp.position;
-                dist = glm::length(d);
-                dir = d / dist;
-                value = l->intensity / (dist * dist);
-            } else if (l->type == LightType::Directional) {
-                dir = -l->direction;
-                value = l->intensity;
-            } else {  // Quad: uniform on the area, converted to solid angle
-                const vec2 ul = s.light_u[next_light_u++];
-                const float u1 = ul.x, u2 = ul.y;
-                const vec3 q = l->corner + u1 * l->edge_u + u2 * l->edge_v;
-                const vec3 d = q - sp.position;
-                dist = glm::length(d);
-                dir = d / dist;
-                const vec3 cross = glm::cross(l->edge_u, l->edge_v);
-                const float area = glm::length(cross);
-                const float cos_l = -glm::dot(dir, cross / area);
-                if (cos_l <= 0.0f) continue;
-                value = l->intensity * (area * cos_l / (dist * dist));
-            }
+            const vec2 u = light_sample_dimensions(*l) ? s.light_u[next_light_u++] : vec2(0.0f);
+            const LightSample ls = sample_light(*l, sp.position, u);
+            if (!ls.valid) continue;
+            const vec3& dir = ls.direction;
             const float cos_i = glm::dot(dir, ns);
             if (cos_i <= 0.0f) continue;
-            const float tfar = std::isfinite(dist) ? dist * (1.0f - 1e-4f) : INFINITY;
-            candidate(dir, tfar, value * brdf.eval(sp.wo, dir) * cos_i, i);
+            const float tfar = shadow_ray(origin, dir, ls.distance).tfar;
+            candidate(dir, tfar, ls.irradiance * brdf.eval(sp.wo, dir) * cos_i, i);
         }
     }
     for (int j = 0; j < n_brdf; ++j)

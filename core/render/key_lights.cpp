@@ -19,24 +19,16 @@ std::vector<KeyLight> key_lights(const RayScene& rs) {
             }
         mean /= double(img.width) * img.height;
         if (best > 20.0 * mean && best > 0.0f) {
-            KeyLight k;
-            k.direction = glm::normalize(
+            Light sun;  // the sun as a directional light (only its direction is read)
+            sun.type = LightType::Directional;
+            sun.direction = -glm::normalize(
                 env->uv_to_direction(vec2((bx + 0.5f) / img.width, (by + 0.5f) / img.height)));
-            keys.push_back(k);
+            keys.push_back(sun);
         }
     }
     for (const Light& l : rs.scene().lights) {
         if (keys.size() >= 3) break;
-        if (l.type == LightType::Point) {
-            KeyLight k;
-            k.distant = false;
-            k.position = l.position;
-            keys.push_back(k);
-        } else if (l.type == LightType::Directional) {
-            KeyLight k;
-            k.direction = -l.direction;
-            keys.push_back(k);
-        }
+        if (l.type == LightType::Point || l.type == LightType::Directional) keys.push_back(l);
     }
     return keys;
 }
@@ -44,23 +36,11 @@ std::vector<KeyLight> key_lights(const RayScene& rs) {
 uint8_t key_light_mask(const RayScene& rs, const std::vector<KeyLight>& keys, const vec3& p,
                        const vec3& n) {
     uint8_t mask = 0;
-    const float scale =
-        std::max(1.0f, std::max(std::abs(p.x), std::max(std::abs(p.y), std::abs(p.z))));
-    const vec3 o = p + n * (1e-3f * scale);
+    const vec3 o = spawn_point(p, n);
     for (size_t k = 0; k < keys.size() && k < 3; ++k) {
-        Ray ray;
-        ray.origin = o;
-        if (keys[k].distant) {
-            ray.direction = keys[k].direction;
-            ray.tfar = INFINITY;
-        } else {
-            const vec3 to = keys[k].position - o;
-            const float d = glm::length(to);
-            if (d <= 0.0f) continue;
-            ray.direction = to / d;
-            ray.tfar = d * (1.0f - 1e-4f);
-        }
-        if (!rs.occluded(ray)) mask |= uint8_t(1u << k);
+        const LightSample s = sample_light(keys[k], o, vec2(0.0f));
+        if (s.valid && !rs.occluded(shadow_ray(o, s.direction, s.distance)))
+            mask |= uint8_t(1u << k);
     }
     return mask;
 }

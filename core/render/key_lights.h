@@ -15,11 +15,9 @@
 
 namespace freqlab {
 
-struct KeyLight {
-    bool distant = true;  // a direction (sun, directional light), else a position
-    vec3 direction{0.0f, 0.0f, 1.0f};
-    vec3 position{0.0f};
-};
+// A key light is a point or directional light (the environment's sun becomes a directional
+// one): its visibility is sample_light's, like every other light's.
+using KeyLight = Light;
 
 // The key lights at rs.time() (a spinning environment turns its sun). The sun counts when its
 // texel is 20 x brighter than the map's mean: a soft sky casts no shadow to track.

@@ -274,7 +274,7 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
                 r.tests.key_lights_tested = true;
                 r.tests.key_lights_then = oc.key_light_mask(r.slot);
                 r.tests.key_lights_now = key_light_mask(rs, keys, r.world_position,
-                                                        gb.hits[size_t(r.pixel)].shading_normal);
+                                                        gb.hits[size_t(r.pixel)].geometric_normal);
                 r.decision = decide_key_lights(r.tests, cache->settings);
             });
         }
@@ -406,7 +406,7 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
             tbb::parallel_for(size_t(0), n, [&](size_t i) {
                 if (fresh[i])
                     key_mask[i] =
-                        key_light_mask(rs, keys, gb.hits[i].position, gb.hits[i].shading_normal);
+                        key_light_mask(rs, keys, gb.hits[i].position, gb.hits[i].geometric_normal);
             });
         std::vector<CacheEntry> entries;
         for (size_t o = 0; o < by_object.size(); ++o) {

@@ -24,6 +24,45 @@ const char* to_string(LightType type) {
     return "?";
 }
 
+LightSample sample_light(const Light& light, const vec3& p, vec2 u) {
+    LightSample s;
+    switch (light.type) {
+        case LightType::Point: {
+            const vec3 to = light.position - p;
+            s.distance = glm::length(to);
+            if (!(s.distance > 0.0f)) return s;
+            s.direction = to / s.distance;
+            s.intensity = light.intensity;
+            s.irradiance = light.intensity / (s.distance * s.distance);
+            break;
+        }
+        case LightType::Directional:
+            s.direction = -light.direction;
+            s.irradiance = s.intensity = light.intensity;
+            break;
+        case LightType::Quad: {
+            const vec3 q = light.corner + u.x * light.edge_u + u.y * light.edge_v;
+            const vec3 to = q - p;
+            s.distance = glm::length(to);
+            if (!(s.distance > 0.0f)) return s;
+            s.direction = to / s.distance;
+            const vec3 cross = glm::cross(light.edge_u, light.edge_v);
+            const float area = glm::length(cross);
+            s.emitter_normal = cross / area;
+            s.emitter_cos = -glm::dot(s.direction, s.emitter_normal);
+            if (s.emitter_cos <= 0.0f) return s;
+            s.intensity = light.intensity * area;
+            s.irradiance = light.intensity * (area * s.emitter_cos / (s.distance * s.distance));
+            break;
+        }
+        case LightType::Environment:
+        case LightType::Sky:
+            return s;  // EnvironmentMap::sample
+    }
+    s.valid = true;
+    return s;
+}
+
 EnvironmentMap::EnvironmentMap(std::string source, std::shared_ptr<const RgbImage> image,
                                float rotation_deg, float scale, float spin_deg_per_s)
     : source_(std::move(source)),

@@ -129,4 +129,24 @@ struct Light {
     ProceduralSky sky;  // Sky: its parameters
 };
 
+// One sample of a point, directional or quad light seen from p: the one copy that method A's
+// direct lighting, method B's bakers, the VPT ground truth and the key-light masks call
+// (environment and sky light is EnvironmentMap::sample's). A quad is sampled uniformly on its
+// area and converted to solid angle; it emits on its edge_u x edge_v side only.
+struct LightSample {
+    bool valid = false;         // false: p behind the quad, or on the point light
+    vec3 direction{0.0f};       // from p towards the sampled point, unit
+    float distance = INFINITY;  // to it; infinite for a directional light
+    vec3 irradiance{0.0f};      // at p on a plane facing the light: radiance / solid-angle pdf
+    vec3 intensity{0.0f};       // point: W/sr; quad: radiance x area; directional: irradiance
+    vec3 emitter_normal{0.0f};  // quad: its unit normal
+    float emitter_cos = 1.0f;   // quad: cosine between -direction and the normal
+};
+// How many uniforms sample_light reads for `light` (quad: 2; point, directional: 0).
+inline int light_sample_dimensions(const Light& light) {
+    return light.type == LightType::Quad ? 2 : 0;
+}
+// `light` must be a point, directional or quad light; u is read by quads only.
+LightSample sample_light(const Light& light, const vec3& p, vec2 u);
+
 }  // namespace freqlab

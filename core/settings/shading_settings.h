@@ -33,7 +33,7 @@ struct PointsSettings {
 // Shared by every method that shades surfaces.
 struct ShadingSettings {
     int mirror_depth = 4;       // perfect-mirror bounces followed (Whitted style)
-    float ray_epsilon = 1e-4f;  // shadow-ray offset, relative to max(1, |p|)
+    float ray_epsilon = 1e-4f;  // shadow-ray offset relative to max(1, |p|); = kRayEpsilon
     static const SettingsSchema& schema();
 };
 

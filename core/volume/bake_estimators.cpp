@@ -13,15 +13,6 @@ namespace {
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr float kBelowHorizonKeep = 0.25f;
 
-// A direction whose cosine with `axis` follows HG(g): where light came from before it was
-// scattered into `axis`'s direction of travel reversed.
-vec3 sample_hg(float g, const vec3& axis, float u1, float u2) {
-    const float cos_t = sample_hg_cos(g, u1);
-    const float sin_t = std::sqrt(std::max(0.0f, 1.0f - cos_t * cos_t));
-    const float phi = kTwoPi * u2;
-    return Frame(axis).to_world(vec3(sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t));
-}
-
 // sin and cos of the area lobes' tilts (a few degrees, area_tables.h) by their Taylor series
 // to the x^9 / x^8 terms: below 1e-7 up to 0.6 rad; sincosf beyond.
 float small_angle_sin(float x) {
@@ -84,9 +75,7 @@ vec3 BakeEstimator::origin(const vec3& p, const vec3& n) const {
 bool BakeEstimator::visible(const vec3& from, const vec3& n, const vec3& dir, double distance,
                             BakeCounters& counters) const {
     ++counters.rays;
-    Ray ray{origin(from, n), dir, 0.0f,
-            std::isfinite(distance) ? float(distance) * (1.0f - 1e-4f) : INFINITY};
-    return !scene_.occluded(ray);
+    return !scene_.occluded(shadow_ray(origin(from, n), dir, distance));
 }
 
 void BakeEstimator::sample_emitters(const vec3& p, CounterRng& rng,
@@ -98,42 +87,28 @@ void BakeEstimator::sample_emitters(const vec3& p, CounterRng& rng,
         EmitterSample s;
         s.light = int(index);
         switch (light.type) {
-            case LightType::Point: {
-                const vec3 to = light.position - p;
-                const float d2 = glm::dot(to, to);
-                if (d2 <= 0.0f) continue;
-                s.kind = EmitterKind::Point;
-                s.distance = std::sqrt(d2);
-                s.dir = to / float(s.distance);
-                s.irradiance = light.intensity / d2;
-                s.intensity = light.intensity;
-                s.fixed = true;
-                break;
-            }
+            case LightType::Point:
             case LightType::Directional:
-                s.kind = EmitterKind::Directional;
-                s.dir = -light.direction;
-                s.irradiance = s.intensity = light.intensity;
-                s.fixed = true;
-                break;
             case LightType::Quad: {
-                const float u1 = rng.next_float(), u2 = rng.next_float();
-                const vec3 q = light.corner + u1 * light.edge_u + u2 * light.edge_v;
-                const vec3 cross = glm::cross(light.edge_u, light.edge_v);
-                const float area = glm::length(cross);
-                const vec3 nl = cross / area;
-                const vec3 to = q - p;
-                const float d2 = glm::dot(to, to);
-                if (d2 <= 0.0f) continue;
-                s.kind = EmitterKind::Area;
-                s.distance = std::sqrt(d2);
-                s.dir = to / float(s.distance);
-                const float cos_l = -glm::dot(s.dir, nl);
-                if (cos_l <= 0.0f) continue;
-                s.irradiance = light.intensity * (area * cos_l / d2);
-                s.intensity = light.intensity * area;
-                s.emitter_normal = nl;
-                s.shift = std::sqrt(std::max(0.0f, 1.0f - cos_l * cos_l));
+                vec2 u(0.0f);
+                if (light_sample_dimensions(light) == 2) {
+                    u.x = rng.next_float();
+                    u.y = rng.next_float();
+                }
+                const LightSample ls = sample_light(light, p, u);
+                if (!ls.valid) continue;
+                s.kind = light.type == LightType::Point         ? EmitterKind::Point
+                         : light.type == LightType::Directional ? EmitterKind::Directional
+                                                                : EmitterKind::Area;
+                s.dir = ls.direction;
+                s.distance = ls.distance;
+                s.irradiance = ls.irradiance;
+                s.intensity = ls.intensity;
+                s.fixed = light.type != LightType::Quad;
+                if (light.type == LightType::Quad) {
+                    s.emitter_normal = ls.emitter_normal;
+                    s.shift = std::sqrt(std::max(0.0f, 1.0f - ls.emitter_cos * ls.emitter_cos));
+                }
                 break;
             }
             case LightType::Environment:
@@ -411,11 +386,10 @@ BakeEstimator::LitMediumSample BakeEstimator::lit_medium_single(const EmitterSam
         if (emission <= 0.0f) return r;
     }
     ++counters.rays;
-    if (scene_.occluded(Ray{x, l, 0.0f, distant ? INFINITY : float(dist) * (1.0f - 1e-4f)}))
-        return r;
+    if (scene_.occluded(shadow_ray(x, l, dist))) return r;
     if (check_path) {
         ++counters.rays;
-        if (scene_.occluded(Ray{o, w, 0.0f, float(t) * (1.0f - 1e-4f)})) return r;
+        if (scene_.occluded(shadow_ray(o, w, t))) return r;
     }
     r.lit = true;
     const double to_emitter = distant ? media_.exit_distance(x, l) : dist;
@@ -534,7 +508,7 @@ vec3 BakeEstimator::point_lights_along(const vec3& o, const vec3& d, double t_ma
         const double dist = glm::length(to_light);
         const vec3 l = to_light / float(dist);
         ++counters.rays;
-        if (scene_.occluded(Ray{x, l, 0.0f, float(dist) * (1.0f - 1e-4f)})) continue;
+        if (scene_.occluded(shadow_ray(x, l, dist))) continue;
         const double w = media_.transmittance(o, d, t) * here.sigma_s *
                          hg_phase(here.g, glm::dot(l, d)) / r2 * media_.transmittance(x, l, dist) /
                          pdf;
@@ -596,16 +570,13 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
                 // Light travels along -s.dir, then along -dir after scattering at x.
                 const float phase = float(hg_phase(c.g, glm::dot(s.dir, dir)));
                 ++counters.rays;
-                Ray shadow{
-                    x, s.dir, 0.0f,
-                    std::isfinite(s.distance) ? float(s.distance) * (1.0f - 1e-4f) : INFINITY};
-                if (scene_.occluded(shadow)) continue;
+                if (scene_.occluded(shadow_ray(x, s.dir, s.distance))) continue;
                 const double length =
                     std::isfinite(s.distance) ? s.distance : media_.exit_distance(x, s.dir);
                 add(cat, throughput * s.irradiance * phase *
                              float(media_.transmittance(x, s.dir, length)));
             }
-            dir = sample_hg(float(c.g), dir, rng.next_float(), rng.next_float());
+            dir = sample_hg_direction(float(c.g), dir, rng.next_float(), rng.next_float());
             pos = x;
             if (events >= 4) {
                 const float survive = std::min(

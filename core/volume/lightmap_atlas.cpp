@@ -130,7 +130,7 @@ float backface_fraction(const RayScene& rs, const vec3& p, const vec3& n, int ra
         const float u1 = rng.next_float(), u2 = rng.next_float();
         vec3 d = sample_uniform_sphere(u1, u2);
         if (glm::dot(d, n) < 0.0f) d = -d;
-        Ray ray{p + n * 1e-4f * (1.0f + glm::length(p)), d, 0.0f, INFINITY};
+        Ray ray{spawn_point(p, n), d, 0.0f, INFINITY};
         const SurfaceHit h = rs.intersect(ray);
         if (!h.valid) continue;
         ++hits;

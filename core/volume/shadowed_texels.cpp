@@ -14,29 +14,25 @@ BakeKeyLight bake_key_light(const RayScene& scene) {
     const std::vector<Light>& lights = scene.scene().lights;
     for (size_t i = 0; i < lights.size(); ++i) {
         const Light& light = lights[i];
-        BakeKeyLight k;
-        k.found = true;
-        k.light = int(i);
-        float e = 0.0f;
-        if (light.type == LightType::Directional) {
-            k.distant = true;
-            k.direction = -light.direction;
-            e = luminance(light.intensity);
-        } else if (light.type == LightType::Point || light.type == LightType::Quad) {
-            const bool quad = light.type == LightType::Quad;
-            k.position =
-                quad ? light.corner + 0.5f * (light.edge_u + light.edge_v) : light.position;
-            const vec3 to = k.position - centre;
-            const float d2 = std::max(glm::dot(to, to), 1e-6f);
-            const float strength =
-                quad ? glm::length(glm::cross(light.edge_u, light.edge_v)) : 1.0f;
-            e = luminance(light.intensity) * strength / d2;
-        } else {
+        if (light.type != LightType::Directional && light.type != LightType::Point &&
+            light.type != LightType::Quad)
             continue;
+        // At normal incidence and whatever side of a quad the centre is on.
+        float e = luminance(light.intensity);
+        if (light.type != LightType::Directional) {
+            const vec3 position = light.type == LightType::Quad
+                                      ? light.corner + 0.5f * (light.edge_u + light.edge_v)
+                                      : light.position;
+            const vec3 to = position - centre;
+            const float area = light.type == LightType::Quad
+                                   ? glm::length(glm::cross(light.edge_u, light.edge_v))
+                                   : 1.0f;
+            e *= area / std::max(glm::dot(to, to), 1e-6f);
         }
         if (e > best_irradiance) {
             best_irradiance = e;
-            best = k;
+            best.found = true;
+            best.light = int(i);
         }
     }
     return best;
@@ -46,20 +42,16 @@ std::vector<uint8_t> shadowed_texels(const RayScene& scene, const ObjectLightmap
                                      const BakeKeyLight& key) {
     std::vector<uint8_t> out(map.texels.size(), 0);
     if (!key.found) return out;
+    const Light& light = scene.scene().lights[size_t(key.light)];
     for (size_t i = 0; i < map.texels.size(); ++i) {
         const LightmapTexel& t = map.texels[i];
         if (t.state != TexelState::Valid) continue;
-        vec3 dir = key.direction;
-        float distance = INFINITY;
-        if (!key.distant) {
-            const vec3 to = key.position - t.position;
-            distance = glm::length(to);
-            if (!(distance > 0.0f)) continue;
-            dir = to / distance;
-        }
-        if (glm::dot(dir, t.normal) <= 0.0f) continue;
-        const vec3 o = spawn_point(t.position, t.normal);
-        out[i] = scene.occluded(Ray{o, dir, 0.0f, distance * (1.0f - 1e-4f)}) ? 1 : 0;
+        const LightSample s = sample_light(light, t.position, vec2(0.5f));
+        if (!s.valid || glm::dot(s.direction, t.normal) <= 0.0f) continue;
+        out[i] =
+            scene.occluded(shadow_ray(spawn_point(t.position, t.normal), s.direction, s.distance))
+                ? 1
+                : 0;
     }
     return out;
 }

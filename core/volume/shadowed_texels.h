@@ -15,18 +15,17 @@ namespace freqlab {
 
 // The point, directional or quad light that gives the most irradiance (luminance, unoccluded,
 // at normal incidence, no media) at the centre of the scene's bounds; a quad counts from its
-// centre. `found` is false when the scene has none of these lights (only an environment).
+// centre (sample_light at u = (1/2, 1/2)). `found` is false when the scene has none of these
+// lights (only an environment).
 struct BakeKeyLight {
     bool found = false;
-    int light = -1;        // index in the scene's lights
-    bool distant = false;  // a direction (directional light), else a position
-    vec3 direction{0.0f};  // towards the light, unit (distant)
-    vec3 position{0.0f};   // the light's position or the quad's centre
+    int light = -1;  // index in the scene's lights
 };
 BakeKeyLight bake_key_light(const RayScene& scene);
 
 // Per texel of `map`: 1 where the texel is Valid, faces the key light (its normal within 90
-// degrees of the direction to it) and the segment to it is occluded: the cast shadow. Empty
+// degrees of the direction to it; on a quad's emitting side) and the segment to it is
+// occluded: the cast shadow. Empty
 // (all 0) without a key light.
 std::vector<uint8_t> shadowed_texels(const RayScene& scene, const ObjectLightmap& map,
                                      const BakeKeyLight& key);
