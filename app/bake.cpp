@@ -98,17 +98,11 @@ void print_debug_texel(const RayScene& rays, const Media& media, const ImpulseTa
          {BakeMethod::Surface, BakeMethod::Extinction, BakeMethod::Impulse, BakeMethod::Vpt}) {
         if (m == BakeMethod::Impulse && !tables && !media.empty()) continue;
         const BakeEstimator estimator(rays, media, tables, m, settings);
-        IrradianceParts sum;
-        BakeCounters counters;
-        for (int s = 0; s < settings.spp; ++s) {
-            CounterRng rng =
-                texel_random(settings.seed, lightmap_index, size_t(y) * map->width + x, s);
-            sum += estimator.estimate(t.position, t.normal, t.albedo, rng, counters);
-        }
-        const float inv = 1.0f / float(settings.spp);
-        std::printf("  %-10s %31.6g %11.6g %11.6g %11.6g\n", to_string(m),
-                    luminance(sum.surface) * inv, luminance(sum.single) * inv,
-                    luminance(sum.multiple) * inv, luminance(sum.total()) * inv);
+        const IrradianceParts mean =
+            texel_estimate(estimator, baker.lightmaps(), lightmap_index, size_t(y) * map->width + x,
+                           settings.seed, settings.spp);
+        std::printf("  %-10s %31.6g %11.6g %11.6g %11.6g\n", to_string(m), luminance(mean.surface),
+                    luminance(mean.single), luminance(mean.multiple), luminance(mean.total()));
     }
     // The baked method's record of the texel's first path (what the workbench's trace shows).
     CounterRng rng = texel_random(settings.seed, lightmap_index, size_t(y) * map->width + x, 0);

@@ -390,3 +390,47 @@ TEST(Bake, ProbesSeeAConstantEnvironmentAndAgreeInFog) {
     std::printf("probe single scattering DC: impulse %.5f vpt %.5f\n", a.single[0].x, b[0].x);
     EXPECT_GT(a.single[0].x, 0.0f);
 }
+
+// --debug-texel and the workbench's texel trace re-run a texel's paths with the bake's own keys
+// (texel_random): on a lightmap other than the first, texel_estimate is what the bake stored
+// there. Keyed as lightmap 0 (the bug this guards against) it is not.
+TEST(Bake, TexelEstimateIsWhatTheBakeStoredOnEveryLightmap) {
+    Fixture f(R"({"frames": 1, "camera": {"position": [0, -5, 3], "look_at": [0, 0, 0]},
+      "materials": {"m": {"type": "lambert", "albedo": 0.7}},
+      "objects": [{"shape": {"type": "plane", "size": [4, 4]}, "material": "m"},
+                  {"shape": {"type": "box", "size": [1, 1, 1]}, "material": "m",
+                   "transform": {"translate": [0.8, 0, 0.5]}}],
+      "lights": [{"type": "point", "position": [-0.5, -0.5, 2.0], "intensity": 8},
+                 {"type": "envmap", "radiance": 0.3}]})");
+    BakeSettings s;
+    s.spp = 4;
+    s.bounces = 1;
+    s.texel_density = 4.0f;
+    LightmapBaker baker(*f.rays, f.media, nullptr, BakeMethod::Surface, s);
+    baker.run();
+    ASSERT_EQ(baker.lightmaps().size(), 2u);
+    const size_t box = 1;
+    const ObjectLightmap& map = baker.lightmaps()[box];
+    const Layer& stored = baker.layers(box).get("lm_irradiance");
+    const BakeEstimator estimator(*f.rays, f.media, nullptr, BakeMethod::Surface, s);
+    int checked = 0, differs_as_lightmap0 = 0;
+    for (size_t i = 0; i < map.texels.size() && checked < 40; i += 7) {
+        if (map.texels[i].state != TexelState::Valid) continue;
+        ++checked;
+        const vec3 mine =
+            texel_estimate(estimator, baker.lightmaps(), box, i, s.seed, s.spp).total();
+        const float baked = stored.data[i * 3];
+        EXPECT_NEAR(mine.x, baked, 1e-5f * std::max(1.0f, baked)) << "texel " << i;
+        IrradianceParts as0;
+        BakeCounters c;
+        for (int k = 0; k < s.spp; ++k) {
+            CounterRng rng = texel_random(s.seed, 0, i, k);
+            as0 += estimator.estimate(map.texels[i].position, map.texels[i].normal,
+                                      map.texels[i].albedo, rng, c);
+        }
+        if (std::abs(as0.total().x / float(s.spp) - baked) > 1e-3f * std::max(1.0f, baked))
+            ++differs_as_lightmap0;
+    }
+    EXPECT_GE(checked, 20);
+    EXPECT_GT(differs_as_lightmap0, checked / 2);
+}

@@ -182,6 +182,23 @@ nlohmann::json LightmapBaker::probes_json() const {
             {"probes", list}};
 }
 
+IrradianceParts texel_estimate(const BakeEstimator& estimator,
+                               const std::vector<ObjectLightmap>& maps, size_t lightmap,
+                               size_t texel, int seed, int spp) {
+    const LightmapTexel& t = maps.at(lightmap).texels.at(texel);
+    IrradianceParts sum;
+    BakeCounters counters;
+    for (int s = 0; s < spp; ++s) {
+        CounterRng rng = texel_random(seed, lightmap, texel, s);
+        sum += estimator.estimate(t.position, t.normal, t.albedo, rng, counters);
+    }
+    const float inv = spp > 0 ? 1.0f / float(spp) : 0.0f;
+    sum.surface *= inv;
+    sum.single *= inv;
+    sum.multiple *= inv;
+    return sum;
+}
+
 LayerSet LightmapBaker::layers(size_t mi) const {
     const ObjectLightmap& map = maps_.at(mi);
     LayerSet set(map.width, map.height);

@@ -80,6 +80,13 @@ inline CounterRng texel_random(int seed, size_t lightmap, size_t texel, int samp
     return CounterRng(uint64_t(seed), lightmap, texel, uint64_t(sample));
 }
 
+// The mean of paths 0 .. spp-1 of `estimator` at texel `texel` of lightmap `lightmap` (of `maps`)
+// under the bake's keys: what a bake with that estimator and seed stores there (up to the order
+// of the additions). --debug-texel prints it for every method.
+IrradianceParts texel_estimate(const BakeEstimator& estimator,
+                               const std::vector<ObjectLightmap>& maps, size_t lightmap,
+                               size_t texel, int seed, int spp);
+
 // The scene's lightmap name for file output: "<object name>" or "object<i>".
 std::string lightmap_name(const Scene& scene, const ObjectLightmap& map);
 
