@@ -94,20 +94,16 @@ int run_render(const RenderArgs& args) {
         config.frame.width = w, config.frame.height = h;
     }
     if (args.spp > 0) {
-        // Method A's points / sparse / cache choose every radiance point's sample count
-        // themselves (N_Omega); --spp used to set gbuffer.aa_samples for them, and did nothing.
-        const bool adaptive = config.method == RenderMethod::Points ||
-                              config.method == RenderMethod::Sparse ||
-                              config.method == RenderMethod::Cache;
-        if (adaptive)
-            throw Error("--spp", std::to_string(args.spp),
-                        std::string("method ") + args.method +
-                            " chooses its sample counts per radiance point (N_Omega); set "
-                            "gbuffer.aa_samples or points.* with --set");
-        const char* key = config.method == RenderMethod::Mis         ? "mis.spp"
-                          : config.method == RenderMethod::Reference ? "reference.spp"
-                                                                     : "gbuffer.aa_samples";
-        settings.apply_assignment(std::string(key) + "=" + std::to_string(args.spp), "--spp");
+        // What --spp sets is the method's (render/method.h): method A's points / sparse / cache
+        // choose every radiance point's sample count themselves and refuse it.
+        const RenderMethodInfo& info = render_method_info(config.method);
+        if (info.spp_setting.empty())
+            throw Error(
+                "--spp", std::to_string(args.spp),
+                "method " + args.method + " " +
+                    (info.spp_refusal.empty() ? "takes no sample count" : info.spp_refusal));
+        const std::string& key = info.spp_setting;
+        settings.apply_assignment(key + "=" + std::to_string(args.spp), "--spp");
     }
     if (args.seed >= 0)
         settings.apply_assignment("frame.seed=" + std::to_string(args.seed), "--seed");

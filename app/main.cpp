@@ -7,6 +7,7 @@
 
 #include "base/error.h"
 #include "commands.h"
+#include "render/method.h"
 #include "volume/impulse_query.h"
 #ifdef FREQLAB_HAS_UI
 #include "workbench.h"
@@ -64,7 +65,7 @@ int main(int argc, char** argv) {
     gui->add_option("--size", gui_size, "window size WxH");
     std::string gui_method = "gbuffer";
     std::vector<std::string> gui_sets;
-    gui->add_option("--method", gui_method, "gbuffer|mis|reference|points|sparse|cache");
+    gui->add_option("--method", gui_method, freqlab::render_method_list());
     gui->add_option("--set", gui_sets, "key=value setting (repeatable)");
     std::string gui_inspect, gui_warm, gui_session;
     bool gui_compare = false, gui_tables = false;
@@ -84,7 +85,7 @@ int main(int argc, char** argv) {
     freqlab::RenderArgs r;
     auto* render = app.add_subcommand("render", "render frames to EXR + PNG + stats.json");
     render->add_option("scene", r.scene, "scene file or builtin:default")->required();
-    render->add_option("--method", r.method, "gbuffer|mis|reference|points|sparse|cache");
+    render->add_option("--method", r.method, freqlab::render_method_list());
     render->add_option("--frames", r.frames, "A:B renders frames A..B-1 (default 0:1)");
     render->add_option("--size", r.size, "WxH");
     render->add_option("--spp", r.spp, "samples per pixel of the method");

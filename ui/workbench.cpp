@@ -135,8 +135,8 @@ void draw_settings_panel(Workbench::State& s) {
         return;
     }
     int method = int(s.config.method);
-    const char* methods = "gbuffer\0mis\0reference\0points\0sparse\0cache\0";
-    if (ImGui::Combo("method", &method, methods) && method != int(s.config.method)) {
+    const std::string methods = render_method_list(std::string(1, '\0')) + '\0';
+    if (ImGui::Combo("method", &method, methods.c_str()) && method != int(s.config.method)) {
         s.config.method = RenderMethod(method);
         restart_renderer(s);
     }

@@ -237,7 +237,7 @@ json session_to_json(const Workbench::State& s) {
     json session = {{"freqlab_session", 1},
                     {"scene", s.options.scene},
                     {"method", s.bake ? std::string(to_string(bake_method(s)))
-                                      : render_method_names()[size_t(s.config.method)]},
+                                      : render_method_info(s.config.method).name},
                     {"frame", s.frame},
                     {"layer", s.layer_name},
                     {"overlay_on_color", s.overlay_on_color},
@@ -299,7 +299,7 @@ void Workbench::load_session(const std::string& path) {
     o.scene = r.get("scene").string();
     const JsonReader method = r.get("method");
     o.method = method.string();
-    const std::vector<std::string>& render_methods = render_method_names();
+    const std::vector<std::string> render_methods = render_method_names();
     const bool bake = is_bake_method(o.method);
     if (!bake &&
         std::find(render_methods.begin(), render_methods.end(), o.method) == render_methods.end()) {

@@ -12,21 +12,6 @@
 
 namespace freqlab {
 
-const std::vector<std::string>& render_method_names() {
-    static const std::vector<std::string> names = {"gbuffer", "mis",    "reference",
-                                                   "points",  "sparse", "cache"};
-    return names;
-}
-
-RenderMethod parse_render_method(const std::string& name) {
-    const auto& names = render_method_names();
-    for (size_t i = 0; i < names.size(); ++i)
-        if (name == names[i]) return RenderMethod(i);
-    std::string list;
-    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
-    throw Error("--method", name, "unknown method; expected one of: " + list);
-}
-
 SettingsGroup RenderConfig::settings_group() {
     SettingsGroup g;
     g.bind(FrameSettings::schema(), &frame);
@@ -41,24 +26,13 @@ SettingsGroup RenderConfig::settings_group() {
 }
 
 SampleSequence RenderConfig::sequence() const {
-    if (method == RenderMethod::Mis) return sample_sequence(mis.stratified);
-    if (method == RenderMethod::Reference) return sample_sequence(reference.stratified);
-    return sample_sequence(points.stratified);
+    const RenderMethodInfo& info = render_method_info(method);
+    return info.sequence ? info.sequence(*this) : SampleSequence::Independent;
 }
 
 int RenderConfig::spp() const {
-    switch (method) {
-        case RenderMethod::Mis:
-            return mis.spp;
-        case RenderMethod::Reference:
-            return reference.spp;
-        case RenderMethod::Points:
-        case RenderMethod::Sparse:
-        case RenderMethod::Cache:
-            return points.max_samples;
-        default:
-            return 0;
-    }
+    const RenderMethodInfo& info = render_method_info(method);
+    return info.spp ? info.spp(*this) : 0;
 }
 
 long count_nonfinite(const LayerSet& layers) {
@@ -68,9 +42,29 @@ long count_nonfinite(const LayerSet& layers) {
     return n;
 }
 
+namespace {
+
+// A method's output layers are its declaration's (method.h): a missing one or one of another
+// kind is a bug of the method, said with its name.
+void check_declared_layers(const RenderMethodInfo& method, const LayerSet& layers) {
+    for (const LayerDeclaration& d : method.layers) {
+        const Layer* l = layers.find(d.name);
+        if (!l || l->kind != d.kind)
+            throw Error("", "method " + method.name,
+                        "declares layer '" + d.name + "' (" + to_string(d.kind) + ") but " +
+                            (l ? std::string("wrote it as ") + to_string(l->kind)
+                               : "did not write it; it wrote " + layers.names()));
+    }
+}
+
+}  // namespace
+
 FrameRenderer::FrameRenderer(const Scene& scene, const RenderConfig& config,
                              const EmbreeDevice& device)
-    : scene_(scene), config_(config), ray_scene_(scene, device) {}
+    : scene_(scene), config_(config), ray_scene_(scene, device) {
+    const RenderMethodInfo& info = render_method_info(config.method);
+    if (info.make_state) method_state_ = info.make_state();
+}
 
 const EnvBandwidthHierarchy* FrameRenderer::bandwidth() {
     const EnvironmentMap* env = scene_.environment();
@@ -93,7 +87,7 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
         // Only what the reference depends on: other methods' settings must not re-render it.
         const nlohmann::json all = copy.settings_group().to_json();
         nlohmann::json settings;
-        for (const char* group : {"frame", "gbuffer", "shading", "reference"})
+        for (const std::string& group : render_method_info(config_.method).setting_groups)
             settings[group] = all.at(group);
         settings["reference"].erase("use_cache");
         // Absent when off, so that references cached before the setting existed still match.
@@ -125,68 +119,33 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
     // Only `gbuffer` shows the AA preview; the shading methods shade the centre hits and replace
     // its colour, so their albedo layer is the centre's (the one their textures multiply) and
     // the AA rays are not cast. The reference keeps them (its cached files carry that layer).
-    const bool antialiased =
-        config_.method == RenderMethod::GBuffer || config_.method == RenderMethod::Reference;
-    GBufferOutput gb =
-        render_gbuffer(ray_scene_, frame, config_.frame, config_.gbuffer, progress, antialiased);
+    const RenderMethodInfo& method = render_method_info(config_.method);
+    GBufferOutput gb = render_gbuffer(ray_scene_, frame, config_.frame, config_.gbuffer, progress,
+                                      method.antialiased_gbuffer);
     stages["gbuffer"] = ms_since(t0);
     result.layers = std::move(gb.layers);
     long rays = gb.rays, guarded = 0;
-    nlohmann::json sparse_stats;
+    nlohmann::json method_stats;
     // Method A's environment bandwidth hierarchy: built (or loaded) once, timed when used.
     const EnvBandwidthHierarchy* bw = nullptr;
-    if (config_.method == RenderMethod::Points || config_.method == RenderMethod::Sparse ||
-        config_.method == RenderMethod::Cache) {
+    if (method.env_bandwidth) {
         t0 = Clock::now();
         bw = bandwidth();
         stages["env_bandwidth"] = ms_since(t0);
     }
-
-    if (config_.method == RenderMethod::Mis || config_.method == RenderMethod::Reference) {
-        t0 = Clock::now();
-        const ShadingPassOutput out =
-            shade_pixels(ray_scene_, gb.gbuffer, frame, config_.frame, config_.spp(),
-                         config_.shading, config_.sequence(), result.layers, progress);
-        stages["shading"] = ms_since(t0);
+    if (method.render) {
+        MethodContext context{ray_scene_,          gb.gbuffer,          frame,  config_, bw,
+                              method_state_.get(), keep_cache_details_, result, progress};
+        MethodOutput out = method.render(context);
         rays += out.rays;
         guarded = out.nonfinite;
-    } else if (config_.method == RenderMethod::Points) {
-        t0 = Clock::now();
-        const PointsPassOutput out =
-            render_points(ray_scene_, gb.gbuffer, frame, config_.frame, config_.shading,
-                          config_.points, bw, result.layers, progress);
-        stages["radiance_points"] = ms_since(t0);
-        rays += out.rays;
-        guarded = out.nonfinite;
-        sparse_stats["pixels_shaded"] = out.pixels_shaded;
-    } else if (config_.method == RenderMethod::Sparse || config_.method == RenderMethod::Cache) {
-        const bool use_cache = config_.method == RenderMethod::Cache;
-        bool reset = false;
-        if (use_cache && frame != cache_state_.last_frame + 1) {
-            // Out of order (a scrub, a re-render): the cache starts afresh at this frame.
-            cache_state_.cache.reset(scene_.objects.size());
-            reset = cache_state_.last_frame >= 0;
+        if (out.stats.contains("stages")) {
+            for (const auto& [key, value] : out.stats["stages"].items()) stages[key] = value;
+            out.stats.erase("stages");
         }
-        if (use_cache && cache_state_.cache.object_count() != scene_.objects.size())
-            cache_state_.cache.reset(scene_.objects.size());
-        if (use_cache && keep_cache_details_)
-            result.cache_snapshot = std::make_shared<const RadianceCache>(cache_state_.cache);
-        const CacheHook hook{cache_state_, config_.cache};
-        SparsePassOutput out = render_sparse(ray_scene_, gb.gbuffer, frame, config_.frame,
-                                             config_.shading, config_.points, config_.sparse, bw,
-                                             result.layers, progress, use_cache ? &hook : nullptr);
-        if (use_cache) {
-            cache_state_.last_frame = frame;
-            out.stats["cache_reset"] = reset;
-            result.cache_records =
-                std::make_shared<const std::vector<CacheRecord>>(std::move(out.cache_records));
-        }
-        for (const auto& [key, value] : out.stats["stages"].items()) stages[key] = value;
-        out.stats.erase("stages");
-        sparse_stats = std::move(out.stats);
-        rays += out.rays;
-        guarded = out.nonfinite;
+        method_stats = std::move(out.stats);
     }
+    check_declared_layers(method, result.layers);
 
     const long nonfinite = count_nonfinite(result.layers) + guarded;
     if (!cache_key.empty())
@@ -203,7 +162,7 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
         {"pixels_shaded", long(result.layers.pixel_count())},
         {"nonfinite", nonfinite},
     };
-    for (const auto& [key, value] : sparse_stats.items()) result.stats[key] = value;
+    for (const auto& [key, value] : method_stats.items()) result.stats[key] = value;
     return result;
 }
 

@@ -13,6 +13,7 @@
 #include "freq/env_bandwidth.h"
 #include "image/layers.h"
 #include "render/cache_pass.h"
+#include "render/method.h"
 #include "render/radiance_point.h"
 #include "render/reference_cache.h"
 #include "settings/cache_settings.h"
@@ -23,10 +24,9 @@
 
 namespace freqlab {
 
+// The built-in methods (render/method.h registers them, in this order); a registered method
+// has an id past Cache.
 enum class RenderMethod { GBuffer, Mis, Reference, Points, Sparse, Cache };
-const std::vector<std::string>& render_method_names();
-// Throws Error listing the methods; a known but unbuilt method says what it waits for.
-RenderMethod parse_render_method(const std::string& name);
 
 struct RenderConfig {
     RenderMethod method = RenderMethod::GBuffer;
@@ -42,7 +42,7 @@ struct RenderConfig {
     // The samples of the chosen method's estimates (mis / reference / radiance points).
     SampleSequence sequence() const;
     // Methods with state across frames (method A's cache) must render frames in order.
-    bool needs_previous_frames() const { return method == RenderMethod::Cache; }
+    bool needs_previous_frames() const { return render_method_info(method).stateful; }
     // All settings of this render under their "prefix.key" names (for --set, JSON, stats).
     SettingsGroup settings_group();
 };
@@ -80,7 +80,7 @@ class FrameRenderer {
     RayScene ray_scene_;
     ReferenceCache cache_;
     std::unique_ptr<EnvBandwidthHierarchy> bandwidth_;  // method A: built on first use
-    CacheState cache_state_;                            // method A's cache across frames
+    std::unique_ptr<MethodState> method_state_;         // the method's across frames
     bool keep_cache_details_ = false;
     const EnvBandwidthHierarchy* bandwidth();
 };

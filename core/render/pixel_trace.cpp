@@ -6,6 +6,7 @@
 
 #include "render/direct_lighting.h"
 #include "render/frame_renderer.h"
+#include "render/pixel_trace.h"
 #include "render/points_pass.h"
 #include "render/radiance_point.h"
 #include "render/reconstruction.h"
@@ -14,60 +15,96 @@
 
 namespace freqlab {
 
-std::vector<std::string> FrameRenderer::trace_pixel(const FrameResult& r, int x, int y,
-                                                    size_t max_samples, RadiancePoint* point) {
-    std::vector<std::string> out;
-    auto line = [&out](const char* format, auto... args) {
-        char buf[512];
-        std::snprintf(buf, sizeof buf, format, args...);
-        out.push_back(buf);
-    };
-    if (x < 0 || y < 0 || x >= r.layers.width() || y >= r.layers.height()) {
-        line("pixel (%d, %d) is outside the %d x %d image", x, y, r.layers.width(),
-             r.layers.height());
-        return out;
-    }
-    const RenderConfig& config = config_;
-    ray_scene_.update(r.time_s);  // the pixel's frame, whatever was rendered last
-    const RayScene& rs = ray_scene_;
-    const CameraRayGenerator cam(rs.scene().camera.at(r.time_s), r.layers.width(),
-                                 r.layers.height());
-    const Ray ray{cam.origin,
-                  cam.direction((x + 0.5f) / r.layers.width(), (y + 0.5f) / r.layers.height())};
-    const SurfaceHit hit = rs.intersect(ray);
-    line("camera ray o = (%.4f, %.4f, %.4f) d = (%.4f, %.4f, %.4f)", ray.origin.x, ray.origin.y,
-         ray.origin.z, ray.direction.x, ray.direction.y, ray.direction.z);
-    if (config.method == RenderMethod::GBuffer) {
-        line("method gbuffer: primary rays only, nothing is estimated");
-        return out;
-    }
-    if (!hit.valid) {
-        line("no hit: background radiance");
-        return out;
-    }
+namespace {
+
+template <class... Args>
+void add_line(TraceLines& out, const char* format, Args... args) {
+    char buf[512];
+    std::snprintf(buf, sizeof buf, format, args...);
+    out.push_back(buf);
+}
+
+}  // namespace
+
+void trace_direct_lighting(const PixelTraceContext& c, TraceLines& out) {
+    auto line = [&out](const char* format, auto... args) { add_line(out, format, args...); };
+    [[maybe_unused]] const RenderConfig& config = c.config;
+    [[maybe_unused]] const RayScene& rs = c.rays;
+    [[maybe_unused]] const FrameResult& r = c.result;
+    [[maybe_unused]] const int x = c.x, y = c.y;
+    [[maybe_unused]] const CameraRayGenerator& cam = c.camera;
+    [[maybe_unused]] const ShadingPoint& sp = c.point;
+    [[maybe_unused]] const size_t max_samples = c.max_samples;
     DirectLighting lighting(rs, config.shading, config.sequence());
-    const ShadingPoint sp = lighting.shading_point(hit, -ray.direction);
-    line("hit object %d \"%s\" t = %.5f, material \"%s\" (%s), uv = (%.4f, %.4f)", hit.object,
-         rs.scene().objects[size_t(hit.object)].name.c_str(), hit.distance,
-         sp.material->name.c_str(), to_string(sp.material->type), hit.uv.x, hit.uv.y);
-    line(
-        "p = (%.5f, %.5f, %.5f) n_g = (%.4f, %.4f, %.4f) n_s = (%.4f, %.4f, %.4f) albedo = "
-        "(%.4f, %.4f, %.4f)",
-        sp.position.x, sp.position.y, sp.position.z, sp.geometric_normal.x, sp.geometric_normal.y,
-        sp.geometric_normal.z, sp.shading_normal.x, sp.shading_normal.y, sp.shading_normal.z,
-        sp.albedo.x, sp.albedo.y, sp.albedo.z);
-    if (sp.material->type == BrdfType::Mirror) {
-        line("perfect mirror: followed up to shading.mirror_depth = %d bounces",
-             config.shading.mirror_depth);
-        return out;
+    std::vector<DirectLighting::SampleTrace> samples;
+    lighting.trace_samples(&samples);
+    CounterRng rng(uint64_t(config.frame.seed) ^ kShadingStream, uint64_t(r.frame),
+                   size_t(y) * r.layers.width() + x, 0);
+    const RadianceEstimate e = lighting.estimate(sp, config.spp(), rng);
+    line("estimate (%.6g, %.6g, %.6g), variance %.4g, %ld shadow rays, %zu candidate samples",
+         e.radiance.x, e.radiance.y, e.radiance.z, e.variance, e.rays, samples.size());
+    line("%-5s %4s %-26s %10s %10s %7s %-30s %s", "strat", "unit", "direction", "pdf", "other_pdf",
+         "w_mis", "contribution (unoccluded)", "visible");
+    for (size_t k = 0; k < samples.size() && k < max_samples; ++k) {
+        const auto& t = samples[k];
+        line("%-5s %4d (%7.4f,%7.4f,%7.4f) %10.4g %10.4g %7.4f (%9.4g,%9.4g,%9.4g) %s",
+             t.environment_strategy ? "env" : "brdf", t.unit, t.direction.x, t.direction.y,
+             t.direction.z, t.pdf, t.other_pdf, t.mis_weight, t.contribution.x, t.contribution.y,
+             t.contribution.z, t.occluded ? "occluded" : "yes");
     }
-    if (config.method == RenderMethod::Cache && r.cache_records)
-        for (const std::string& s :
-             cache_entries_near(*r.cache_records, r.cache_snapshot.get(), x, y, 1, r.layers.width(),
-                                config.cache, max_samples))
-            out.push_back(s);
-    if ((config.method == RenderMethod::Sparse || config.method == RenderMethod::Cache) &&
-        r.layers.find("samples")) {
+    if (samples.size() > max_samples) line("... %zu more samples", samples.size() - max_samples);
+}
+
+void trace_radiance_point(const PixelTraceContext& c, TraceLines& out) {
+    auto line = [&out](const char* format, auto... args) { add_line(out, format, args...); };
+    [[maybe_unused]] const RenderConfig& config = c.config;
+    [[maybe_unused]] const RayScene& rs = c.rays;
+    [[maybe_unused]] const FrameResult& r = c.result;
+    [[maybe_unused]] const int x = c.x, y = c.y;
+    [[maybe_unused]] const CameraRayGenerator& cam = c.camera;
+    [[maybe_unused]] const ShadingPoint& sp = c.point;
+    [[maybe_unused]] const size_t max_samples = c.max_samples;
+    const SurfaceHit& hit = c.hit;
+    {
+        // The radiance point's whole chain, with the render's seed keys and G-buffer context.
+        auto hit_at = [&](int px, int py) {
+            return rs.intersect(Ray{cam.origin, cam.direction((px + 0.5f) / r.layers.width(),
+                                                              (py + 0.5f) / r.layers.height())});
+        };
+        SurfaceHit neighbours[4];
+        int count = 0;
+        if (x + 1 < r.layers.width()) neighbours[count++] = hit_at(x + 1, y);
+        if (x > 0) neighbours[count++] = hit_at(x - 1, y);
+        if (y + 1 < r.layers.height()) neighbours[count++] = hit_at(x, y + 1);
+        if (y > 0) neighbours[count++] = hit_at(x, y - 1);
+        PointContext ctx;
+        ctx.curvature = screen_space_curvature(hit, neighbours, count);
+        ctx.eye_distance = hit.distance;
+        ctx.time = r.time_s;
+        ctx.object = hit.object;
+        line("screen-space curvature k = %.5g, eye distance %.5g", ctx.curvature, ctx.eye_distance);
+        const RadiancePointIntegrator integrator(rs, config.shading, config.points, c.bandwidth);
+        CounterRng rng(uint64_t(config.frame.seed) ^ kPointsStream, uint64_t(r.frame),
+                       size_t(y) * r.layers.width() + x, 0);
+        std::vector<std::string> chain;
+        const RadiancePoint rp = integrator.integrate(sp, ctx, rng, &chain);
+        if (c.radiance_point) *c.radiance_point = rp;
+        out.insert(out.end(), chain.begin(), chain.end());
+        return;
+    }
+}
+
+void trace_reconstruction(const PixelTraceContext& c, TraceLines& out) {
+    auto line = [&out](const char* format, auto... args) { add_line(out, format, args...); };
+    [[maybe_unused]] const RenderConfig& config = c.config;
+    [[maybe_unused]] const RayScene& rs = c.rays;
+    [[maybe_unused]] const FrameResult& r = c.result;
+    [[maybe_unused]] const int x = c.x, y = c.y;
+    [[maybe_unused]] const CameraRayGenerator& cam = c.camera;
+    [[maybe_unused]] const ShadingPoint& sp = c.point;
+    [[maybe_unused]] const size_t max_samples = c.max_samples;
+    if (!r.layers.find("samples")) return;
+    {
         // Which radiance points the reconstruction used here, and with what weight (Eq. 6.2).
         const int w = r.layers.width(), h = r.layers.height();
         const double angle = radians_per_pixel(cam, w, h);
@@ -87,10 +124,6 @@ std::vector<std::string> FrameRenderer::trace_pixel(const FrameResult& r, int x,
         };
         line("reconstruction: radius %.2f px, sum of weights %.4g, sampled here: %s", radius,
              r.layers.get("recon_weight").data[i], origin(i));
-        if (sp.material->type == BrdfType::Mirror) {
-            line("perfect mirror: its own radiance point, never filtered");
-            return out;
-        }
         const PixelFeature fi = feature_at(x, y);
         struct Contribution {
             int x, y;
@@ -123,52 +156,76 @@ std::vector<std::string> FrameRenderer::trace_pixel(const FrameResult& r, int x,
                  origin(j), used[k].weight, total > 0 ? 100.0 * used[k].weight / total : 0.0,
                  samples.data[3 * j], samples.data[3 * j + 1], samples.data[3 * j + 2]);
         }
+        return;
+    }
+}
+
+void trace_cache(const PixelTraceContext& c, TraceLines& out) {
+    const FrameResult& r = c.result;
+    if (r.cache_records)
+        for (const std::string& s :
+             cache_entries_near(*r.cache_records, r.cache_snapshot.get(), c.x, c.y, 1,
+                                r.layers.width(), c.config.cache, c.max_samples))
+            out.push_back(s);
+    trace_reconstruction(c, out);
+}
+
+std::vector<std::string> FrameRenderer::trace_pixel(const FrameResult& r, int x, int y,
+                                                    size_t max_samples, RadiancePoint* point) {
+    std::vector<std::string> out;
+    auto line = [&out](const char* format, auto... args) {
+        char buf[512];
+        std::snprintf(buf, sizeof buf, format, args...);
+        out.push_back(buf);
+    };
+    if (x < 0 || y < 0 || x >= r.layers.width() || y >= r.layers.height()) {
+        line("pixel (%d, %d) is outside the %d x %d image", x, y, r.layers.width(),
+             r.layers.height());
         return out;
     }
-    if (config.method == RenderMethod::Points) {
-        // The radiance point's whole chain, with the render's seed keys and G-buffer context.
-        auto hit_at = [&](int px, int py) {
-            return rs.intersect(Ray{cam.origin, cam.direction((px + 0.5f) / r.layers.width(),
-                                                              (py + 0.5f) / r.layers.height())});
-        };
-        SurfaceHit neighbours[4];
-        int count = 0;
-        if (x + 1 < r.layers.width()) neighbours[count++] = hit_at(x + 1, y);
-        if (x > 0) neighbours[count++] = hit_at(x - 1, y);
-        if (y + 1 < r.layers.height()) neighbours[count++] = hit_at(x, y + 1);
-        if (y > 0) neighbours[count++] = hit_at(x, y - 1);
-        PointContext ctx;
-        ctx.curvature = screen_space_curvature(hit, neighbours, count);
-        ctx.eye_distance = hit.distance;
-        ctx.time = r.time_s;
-        ctx.object = hit.object;
-        line("screen-space curvature k = %.5g, eye distance %.5g", ctx.curvature, ctx.eye_distance);
-        const RadiancePointIntegrator integrator(rs, config.shading, config.points, bandwidth());
-        CounterRng rng(uint64_t(config.frame.seed) ^ kPointsStream, uint64_t(r.frame),
-                       size_t(y) * r.layers.width() + x, 0);
-        std::vector<std::string> chain;
-        const RadiancePoint rp = integrator.integrate(sp, ctx, rng, &chain);
-        if (point) *point = rp;
-        out.insert(out.end(), chain.begin(), chain.end());
+    const RenderConfig& config = config_;
+    ray_scene_.update(r.time_s);  // the pixel's frame, whatever was rendered last
+    const RayScene& rs = ray_scene_;
+    const CameraRayGenerator cam(rs.scene().camera.at(r.time_s), r.layers.width(),
+                                 r.layers.height());
+    const Ray ray{cam.origin,
+                  cam.direction((x + 0.5f) / r.layers.width(), (y + 0.5f) / r.layers.height())};
+    const SurfaceHit hit = rs.intersect(ray);
+    line("camera ray o = (%.4f, %.4f, %.4f) d = (%.4f, %.4f, %.4f)", ray.origin.x, ray.origin.y,
+         ray.origin.z, ray.direction.x, ray.direction.y, ray.direction.z);
+    const RenderMethodInfo& method = render_method_info(config.method);
+    if (!method.render) {
+        line("method %s: primary rays only, nothing is estimated", method.name.c_str());
         return out;
     }
-    std::vector<DirectLighting::SampleTrace> samples;
-    lighting.trace_samples(&samples);
-    CounterRng rng(uint64_t(config.frame.seed) ^ kShadingStream, uint64_t(r.frame),
-                   size_t(y) * r.layers.width() + x, 0);
-    const RadianceEstimate e = lighting.estimate(sp, config.spp(), rng);
-    line("estimate (%.6g, %.6g, %.6g), variance %.4g, %ld shadow rays, %zu candidate samples",
-         e.radiance.x, e.radiance.y, e.radiance.z, e.variance, e.rays, samples.size());
-    line("%-5s %4s %-26s %10s %10s %7s %-30s %s", "strat", "unit", "direction", "pdf", "other_pdf",
-         "w_mis", "contribution (unoccluded)", "visible");
-    for (size_t k = 0; k < samples.size() && k < max_samples; ++k) {
-        const auto& t = samples[k];
-        line("%-5s %4d (%7.4f,%7.4f,%7.4f) %10.4g %10.4g %7.4f (%9.4g,%9.4g,%9.4g) %s",
-             t.environment_strategy ? "env" : "brdf", t.unit, t.direction.x, t.direction.y,
-             t.direction.z, t.pdf, t.other_pdf, t.mis_weight, t.contribution.x, t.contribution.y,
-             t.contribution.z, t.occluded ? "occluded" : "yes");
+    if (!hit.valid) {
+        line("no hit: background radiance");
+        return out;
     }
-    if (samples.size() > max_samples) line("... %zu more samples", samples.size() - max_samples);
+    DirectLighting lighting(rs, config.shading, config.sequence());
+    const ShadingPoint sp = lighting.shading_point(hit, -ray.direction);
+    line("hit object %d \"%s\" t = %.5f, material \"%s\" (%s), uv = (%.4f, %.4f)", hit.object,
+         rs.scene().objects[size_t(hit.object)].name.c_str(), hit.distance,
+         sp.material->name.c_str(), to_string(sp.material->type), hit.uv.x, hit.uv.y);
+    line(
+        "p = (%.5f, %.5f, %.5f) n_g = (%.4f, %.4f, %.4f) n_s = (%.4f, %.4f, %.4f) albedo = "
+        "(%.4f, %.4f, %.4f)",
+        sp.position.x, sp.position.y, sp.position.z, sp.geometric_normal.x, sp.geometric_normal.y,
+        sp.geometric_normal.z, sp.shading_normal.x, sp.shading_normal.y, sp.shading_normal.z,
+        sp.albedo.x, sp.albedo.y, sp.albedo.z);
+    if (sp.material->type == BrdfType::Mirror) {
+        line("perfect mirror: followed up to shading.mirror_depth = %d bounces",
+             config.shading.mirror_depth);
+        return out;
+    }
+    if (!method.trace) {
+        line("method %s has no per-pixel trace", method.name.c_str());
+        return out;
+    }
+    const PixelTraceContext context{
+        rs,          config, r, x, y, cam, hit, sp, method.env_bandwidth ? bandwidth() : nullptr,
+        max_samples, point};
+    method.trace(context, out);
     return out;
 }
 
