@@ -16,6 +16,7 @@
 #include "base/error.h"
 
 #include "gl_host.h"
+#include "gl_session.h"
 #include "image/colormap.h"
 #include "layer_view.h"
 #include "osmesa_host.h"
@@ -23,25 +24,10 @@
 
 using namespace freqlab;
 using namespace freqlab::ui;
+using namespace freqlab::ui::test;
 namespace fs = std::filesystem;
 
 namespace {
-
-// An ImGui context plus an OSMesa context with the OpenGL3 backend, per test.
-struct GlSession {
-    explicit GlSession(int w = 960, int h = 600) {
-        ImGui::CreateContext();
-        ImGui::GetIO().IniFilename = nullptr;
-        host = std::make_unique<OsMesaHost>(w, h);
-        ImGui_ImplOpenGL3_Init("#version 330");
-    }
-    ~GlSession() {
-        ImGui_ImplOpenGL3_Shutdown();
-        host.reset();
-        ImGui::DestroyContext();
-    }
-    std::unique_ptr<OsMesaHost> host;
-};
 
 void expect_colour(const unsigned char* px, const vec3& expected, const std::string& where) {
     for (int c = 0; c < 3; ++c)
@@ -108,25 +94,7 @@ TEST(GlColormap, EachKindMatchesTheCpuColormap) {
                 << "colour x=" << x;
 }
 
-namespace {
-
-void run_until_shown(GlSession& gl, Workbench& wb) {
-    for (int i = 0; i < 400 && !wb.frame_shown(); ++i) {
-        wb.wait_for_render();
-        render_ui_frame(*gl.host, wb);
-    }
-    ASSERT_TRUE(wb.frame_shown()) << wb.error();
-    render_ui_frame(*gl.host, wb);  // one more frame: the layout uses the shown result
-}
-
-WorkbenchOptions small_scene(const std::string& layer) {
-    WorkbenchOptions o;
-    o.layer = layer;
-    o.settings = {"frame.width=160", "frame.height=90", "gbuffer.aa_samples=1"};
-    return o;
-}
-
-}  // namespace
+namespace {}  // namespace
 
 TEST(GlWorkbench, ColorbarHasTheColormapAndItsTicks) {
     GlSession gl;

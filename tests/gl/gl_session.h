@@ -1,0 +1,49 @@
+// What the GL tests share: an ImGui + OSMesa session per test, a small scene's options, and
+// the UI loop until the workbench shows a frame.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <imgui.h>
+#include <imgui_impl_opengl3.h>
+
+#include <memory>
+#include <string>
+
+#include "osmesa_host.h"
+#include "workbench.h"
+
+namespace freqlab::ui::test {
+
+// An ImGui context plus an OSMesa context with the OpenGL3 backend, per test.
+struct GlSession {
+    explicit GlSession(int w = 960, int h = 600) {
+        ImGui::CreateContext();
+        ImGui::GetIO().IniFilename = nullptr;
+        host = std::make_unique<OsMesaHost>(w, h);
+        ImGui_ImplOpenGL3_Init("#version 330");
+    }
+    ~GlSession() {
+        ImGui_ImplOpenGL3_Shutdown();
+        host.reset();
+        ImGui::DestroyContext();
+    }
+    std::unique_ptr<OsMesaHost> host;
+};
+
+inline void run_until_shown(GlSession& gl, Workbench& wb) {
+    for (int i = 0; i < 400 && !wb.frame_shown(); ++i) {
+        wb.wait_for_render();
+        render_ui_frame(*gl.host, wb);
+    }
+    ASSERT_TRUE(wb.frame_shown()) << wb.error();
+    render_ui_frame(*gl.host, wb);  // one more frame: the layout uses the shown result
+}
+
+inline WorkbenchOptions small_scene(const std::string& layer) {
+    WorkbenchOptions o;
+    o.layer = layer;
+    o.settings = {"frame.width=160", "frame.height=90", "gbuffer.aa_samples=1"};
+    return o;
+}
+
+}  // namespace freqlab::ui::test
