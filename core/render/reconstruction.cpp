@@ -22,7 +22,8 @@ double reconstruction_weight(const PixelFeature& fi, const PixelFeature& fj, flo
                       ds * ds / (2.0f * s.sigma_sigma_v * s.sigma_sigma_v)));
 }
 
-ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSettings& s) {
+ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSettings& s,
+                                 ReconstructionRecord* record) {
     const int w = in.width, h = in.height;
     const size_t n = size_t(w) * h;
     ReconstructionOutput out;
@@ -41,7 +42,10 @@ ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSett
                 const PixelFeature& fi = in.features[i];
                 if (!fi.valid) continue;
                 float r = std::clamp(in.radius[i], 1.0f, s.f_max);
+                ReconstructionRecord* here =
+                    record && record->x == x && record->y == y ? record : nullptr;
                 for (;;) {
+                    if (here) here->used.clear();
                     const int ri = int(std::ceil(r));
                     double sum_w = 0.0;
                     glm::dvec3 acc(0.0);
@@ -64,7 +68,13 @@ ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSett
                                 fi, fj, in.mu_v[i], in.mu_v[j], in.sigma_v[i], in.sigma_v[j], s);
                             sum_w += weight;
                             acc += weight * glm::dvec3(in.value[j]);
+                            if (here) here->used.push_back({xx, yy, weight});
                         }
+                    }
+                    if (here) {
+                        here->radius = r;
+                        here->sum = sum_w;
+                        here->recorded = true;
                     }
                     if (sum_w > 1e-6) {
                         out.value[i] = vec3(acc / sum_w);

@@ -36,7 +36,23 @@ struct ReconstructionOutput {
     long fallback_pixels = 0;
 };
 
-ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSettings& settings);
+// What the reconstruction summed at one pixel, recorded while it ran (--debug-pixel, the
+// inspector, tests): every sample it weighed at the radius it settled on, in scan order.
+struct ReconstructionRecord {
+    int x = -1, y = -1;  // the pixel to record (set by the caller)
+    struct Contribution {
+        int x, y;
+        double weight;
+    };
+    std::vector<Contribution> used;
+    float radius = 0.0f;
+    double sum = 0.0;
+    bool recorded = false;
+};
+
+// `record`, when given, receives pixel (record->x, record->y)'s contributions.
+ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSettings& settings,
+                                 ReconstructionRecord* record = nullptr);
 
 // Eq. 6.2's weight of the sample at pixel j for pixel i (what reconstruct() sums; the inspector
 // lists it). Distance in units of pixel i's footprint.

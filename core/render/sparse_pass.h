@@ -17,6 +17,7 @@
 #include "render/cache_pass.h"
 #include "render/gbuffer.h"
 #include "render/radiance_point.h"
+#include "render/reconstruction.h"
 #include "settings/sparse_settings.h"
 
 namespace freqlab {
@@ -40,7 +41,8 @@ SparsePassOutput render_sparse(const RayScene& scene, const GBuffer& gbuffer, in
                                const FrameSettings& frame_settings, const ShadingSettings& shading,
                                const PointsSettings& points, const SparseSettings& sparse,
                                const EnvBandwidthHierarchy* bandwidth, LayerSet& layers,
-                               Progress& progress, const CacheHook* cache = nullptr);
+                               Progress& progress, const CacheHook* cache = nullptr,
+                               ReconstructionRecord* record = nullptr);
 
 // The `sampled` layer's categories.
 // (The layer adds 4 = reused for the cache's entries.)
