@@ -442,3 +442,66 @@ TEST(CachePipeline, AMovingShadowExpiresTheLitEntriesItReaches) {
     // (measured: 0.036 vs 0.025 mean |error|); with it, no stale lit entry contributes.
     EXPECT_LT(err_on, err_off);
 }
+
+// The pixel trace's reconstruction weights are the render's: rebuilt from the frame's layers,
+// the scene and the reused entries' positions, they equal, exactly and in the same order, what
+// reconstruct() summed (recorded during the render), on a pixel whose neighbourhood holds cache
+// entries reused off their pixel centres (truck, frame 2) and on a sparse frame.
+TEST(CachePipeline, TraceWeightsAreTheRendersExactly) {
+    // truck.json: the camera orbits, so reused entries sit off their pixels' centre hits.
+    const Scene scene = load_scene(std::string(FREQLAB_SOURCE_DIR) + "/scenes/truck.json");
+    for (RenderMethod method : {RenderMethod::Cache, RenderMethod::Sparse}) {
+        SCOPED_TRACE(int(method));
+        const RenderConfig config = small_config(method, 160, 90, 32);
+        const int last = method == RenderMethod::Cache ? 2 : 0;
+        EmbreeDevice device(2);
+        Progress progress;
+        // A pixel reconstructed from others (not sampled itself), with a reused neighbour
+        // under the cache.
+        int px = -1, py = -1;
+        {
+            FrameRenderer renderer(scene, config, device);
+            FrameResult f;
+            for (int frame = 0; frame <= last; ++frame) f = renderer.render(frame, progress);
+            const Layer& sampled = f.layers.get("sampled");
+            const Layer& position = f.layers.get("position");
+            // Reused samples whose entry does not sit at their pixel's centre hit.
+            std::vector<char> off_centre(size_t(160) * 90, 0);
+            if (f.sample_positions)
+                for (const auto& [pixel, p] : *f.sample_positions)
+                    off_centre[size_t(pixel)] =
+                        glm::length(p - vec3(position.data[3 * size_t(pixel)],
+                                             position.data[3 * size_t(pixel) + 1],
+                                             position.data[3 * size_t(pixel) + 2])) > 1e-4f;
+            for (int y = 5; y < 85 && px < 0; ++y)
+                for (int x = 5; x < 155 && px < 0; ++x) {
+                    if (sampled.data[size_t(y) * 160 + x] != 0.0f) continue;
+                    const ReconstructionRecord r = renderer.reconstruction_weights(f, x, y);
+                    bool wanted = method == RenderMethod::Sparse;
+                    for (const auto& c : r.used)
+                        wanted = wanted || off_centre[size_t(c.y) * 160 + c.x];
+                    if (r.used.size() >= 3 && wanted) px = x, py = y;
+                }
+        }
+        ASSERT_GE(px, 0) << "no reconstructed pixel next to an entry reused off its pixel centre";
+        FrameRenderer renderer(scene, config, device);
+        ReconstructionRecord rendered;
+        rendered.x = px;
+        rendered.y = py;
+        renderer.record_reconstruction(&rendered);
+        FrameResult f;
+        for (int frame = 0; frame <= last; ++frame) f = renderer.render(frame, progress);
+        ASSERT_TRUE(rendered.recorded);
+        const ReconstructionRecord traced = renderer.reconstruction_weights(f, px, py);
+        EXPECT_EQ(traced.radius, rendered.radius);
+        EXPECT_EQ(traced.sum, rendered.sum);
+        ASSERT_EQ(traced.used.size(), rendered.used.size());
+        for (size_t k = 0; k < traced.used.size(); ++k) {
+            EXPECT_EQ(traced.used[k].x, rendered.used[k].x) << k;
+            EXPECT_EQ(traced.used[k].y, rendered.used[k].y) << k;
+            EXPECT_EQ(traced.used[k].weight, rendered.used[k].weight) << k;
+        }
+        EXPECT_FLOAT_EQ(float(traced.sum),
+                        f.layers.get("recon_weight").data[size_t(py) * 160 + px]);
+    }
+}

@@ -15,6 +15,7 @@
 #include "render/cache_pass.h"
 #include "render/method.h"
 #include "render/radiance_point.h"
+#include "render/reconstruction.h"
 #include "render/reference_cache.h"
 #include "settings/cache_settings.h"
 #include "settings/render_settings.h"
@@ -58,6 +59,8 @@ struct FrameResult {
     // Method cache: every entry's decision this frame (the inspector explains them).
     std::shared_ptr<const std::vector<CacheRecord>> cache_records;
     std::shared_ptr<const RadianceCache> cache_snapshot;  // entries before this frame's changes
+    // Method cache: the reused samples' positions (SparsePassOutput::moved_samples).
+    std::shared_ptr<const std::vector<std::pair<int, vec3>>> sample_positions;
 };
 
 class FrameRenderer {
@@ -68,6 +71,11 @@ class FrameRenderer {
     // Method cache: also return a copy of the cache as it was before each frame (for the
     // inspector; costs a copy of the cache per frame).
     void keep_cache_details(bool on) { keep_cache_details_ = on; }
+    // Methods that reconstruct record pixel (record->x, record->y)'s contributions into
+    // *record during the next renders (null: none).
+    void record_reconstruction(ReconstructionRecord* record) { record_ = record; }
+    // The contributions the pixel trace prints for pixel (x, y) of `result` (sparse, cache).
+    ReconstructionRecord reconstruction_weights(const FrameResult& result, int x, int y);
     // The estimate of pixel (x, y) of `result` re-run with every sample traced, as text lines
     // (render/pixel_trace.cpp). Not while render() runs on another thread.
     // For method points, `point` (when given) receives the pixel's radiance point.
@@ -82,6 +90,7 @@ class FrameRenderer {
     std::unique_ptr<EnvBandwidthHierarchy> bandwidth_;  // method A: built on first use
     std::unique_ptr<MethodState> method_state_;         // the method's across frames
     bool keep_cache_details_ = false;
+    ReconstructionRecord* record_ = nullptr;
     const EnvBandwidthHierarchy* bandwidth();
 };
 

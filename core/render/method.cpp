@@ -75,7 +75,8 @@ MethodOutput sparse_output(SparsePassOutput&& out) {
 MethodOutput render_sparse_method(MethodContext& c) {
     return sparse_output(render_sparse(c.rays, c.gbuffer, c.frame, c.config.frame, c.config.shading,
                                        c.config.points, c.config.sparse, c.bandwidth,
-                                       c.result.layers, c.progress, nullptr));
+                                       c.result.layers, c.progress, nullptr,
+                                       c.reconstruction_record));
 }
 
 struct CacheMethodState : MethodState {
@@ -95,10 +96,12 @@ MethodOutput render_cache_method(MethodContext& c) {
     if (c.keep_details)
         c.result.cache_snapshot = std::make_shared<const RadianceCache>(state.cache);
     const CacheHook hook{state, c.config.cache};
-    SparsePassOutput out =
-        render_sparse(c.rays, c.gbuffer, c.frame, c.config.frame, c.config.shading, c.config.points,
-                      c.config.sparse, c.bandwidth, c.result.layers, c.progress, &hook);
+    SparsePassOutput out = render_sparse(
+        c.rays, c.gbuffer, c.frame, c.config.frame, c.config.shading, c.config.points,
+        c.config.sparse, c.bandwidth, c.result.layers, c.progress, &hook, c.reconstruction_record);
     state.last_frame = c.frame;
+    c.result.sample_positions =
+        std::make_shared<const std::vector<std::pair<int, vec3>>>(std::move(out.moved_samples));
     c.result.cache_records =
         std::make_shared<const std::vector<CacheRecord>>(std::move(out.cache_records));
     MethodOutput m = sparse_output(std::move(out));

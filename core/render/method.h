@@ -27,6 +27,7 @@ struct RenderConfig;
 struct FrameResult;
 struct ShadingPoint;
 struct SurfaceHit;
+struct ReconstructionRecord;
 struct RadiancePoint;
 class RayScene;
 class EnvBandwidthHierarchy;
@@ -45,9 +46,10 @@ struct MethodContext {
     const GBuffer& gbuffer;
     int frame;
     const RenderConfig& config;
-    const EnvBandwidthHierarchy* bandwidth;  // when the method asks for it (and a map exists)
-    MethodState* state;                      // its make_state()'s, else null
-    bool keep_details;                       // FrameRenderer::keep_cache_details
+    const EnvBandwidthHierarchy* bandwidth;       // when the method asks for it (and a map exists)
+    MethodState* state;                           // its make_state()'s, else null
+    bool keep_details;                            // FrameRenderer::keep_cache_details
+    ReconstructionRecord* reconstruction_record;  // FrameRenderer::record_reconstruction
     FrameResult& result;
     Progress& progress;
 };

@@ -94,69 +94,92 @@ void trace_radiance_point(const PixelTraceContext& c, TraceLines& out) {
     }
 }
 
+ReconstructionRecord rebuild_reconstruction(const RayScene& rs, const RenderConfig& config,
+                                            const FrameResult& r, const CameraRayGenerator& camera,
+                                            int x, int y) {
+    ReconstructionRecord record;
+    record.x = x;
+    record.y = y;
+    const int w = r.layers.width(), h = r.layers.height();
+    const Layer* radius_layer = r.layers.find("recon_radius");
+    if (!radius_layer || x < 0 || y < 0 || x >= w || y >= h) return record;
+    const float radius = radius_layer->data[size_t(y) * w + x];
+    if (!(radius > 0.0f)) return record;  // not reconstructed: background or a mirror
+    // The render's inputs over the window the radius reaches: features from the same centre
+    // rays as the G-buffer (mirrors never mixed), features and samples from the layers, and
+    // the reused entries' own positions.
+    const int reach = int(std::ceil(radius)) + 1;
+    const int x0 = std::max(0, x - reach), x1 = std::min(w - 1, x + reach);
+    const int y0 = std::max(0, y - reach), y1 = std::min(h - 1, y + reach);
+    ReconstructionInput in;
+    in.width = x1 - x0 + 1;
+    in.height = y1 - y0 + 1;
+    const size_t m = size_t(in.width) * in.height;
+    in.features.resize(m);
+    in.mu_v.resize(m);
+    in.sigma_v.resize(m);
+    in.sampled.resize(m);
+    in.value.assign(m, vec3(0.0f));
+    in.radius.assign(m, radius);
+    const double angle = radians_per_pixel(camera, w, h);
+    const Layer& sampled = r.layers.get("sampled");
+    const Layer& mu = r.layers.get("mu_v");
+    const Layer& sigma = r.layers.get("sigma_v");
+    for (int yy = y0; yy <= y1; ++yy)
+        for (int xx = x0; xx <= x1; ++xx) {
+            const size_t j = size_t(yy) * w + xx, k = size_t(yy - y0) * in.width + (xx - x0);
+            const Ray ray{camera.origin, camera.direction((xx + 0.5f) / w, (yy + 0.5f) / h)};
+            const SurfaceHit hit = rs.intersect(ray);
+            PixelFeature f = pixel_feature(hit, ray.direction, angle);
+            if (hit.valid && rs.scene().materials[size_t(hit.material)].type == BrdfType::Mirror)
+                f.object = -2 - int(k);
+            in.features[k] = f;
+            in.mu_v[k] = mu.data[j];
+            in.sigma_v[k] = sigma.data[j];
+            in.sampled[k] = sampled.data[j] != 0.0f;
+        }
+    if (r.sample_positions) {
+        in.sample_features = in.features;
+        for (const auto& [pixel, position] : *r.sample_positions) {
+            const int px = pixel % w, py = pixel / w;
+            if (px >= x0 && px <= x1 && py >= y0 && py <= y1)
+                in.sample_features[size_t(py - y0) * in.width + (px - x0)].position = position;
+        }
+    }
+    reconstruct_pixel_at(in, x - x0, y - y0, radius, config.sparse, record);
+    record.x = x;
+    record.y = y;
+    for (ReconstructionRecord::Contribution& c : record.used) c.x += x0, c.y += y0;
+    return record;
+}
+
 void trace_reconstruction(const PixelTraceContext& c, TraceLines& out) {
     auto line = [&out](const char* format, auto... args) { add_line(out, format, args...); };
-    [[maybe_unused]] const RenderConfig& config = c.config;
-    [[maybe_unused]] const RayScene& rs = c.rays;
-    [[maybe_unused]] const FrameResult& r = c.result;
-    [[maybe_unused]] const int x = c.x, y = c.y;
-    [[maybe_unused]] const CameraRayGenerator& cam = c.camera;
-    [[maybe_unused]] const ShadingPoint& sp = c.point;
-    [[maybe_unused]] const size_t max_samples = c.max_samples;
+    const FrameResult& r = c.result;
     if (!r.layers.find("samples")) return;
-    {
-        // Which radiance points the reconstruction used here, and with what weight (Eq. 6.2).
-        const int w = r.layers.width(), h = r.layers.height();
-        const double angle = radians_per_pixel(cam, w, h);
-        auto feature_at = [&](int px, int py) {
-            const Ray ray_p{cam.origin, cam.direction((px + 0.5f) / w, (py + 0.5f) / h)};
-            return pixel_feature(rs.intersect(ray_p), ray_p.direction, angle);
-        };
-        const Layer& kind = r.layers.get("sampled");
-        const Layer& samples = r.layers.get("samples");
-        const Layer& mu = r.layers.get("mu_v");
-        const Layer& sig = r.layers.get("sigma_v");
-        const size_t i = size_t(y) * w + x;
-        const float radius = r.layers.get("recon_radius").data[i];
-        auto origin = [&](size_t j) {
-            const size_t k = size_t(kind.data[j]);
-            return k < kind.legend.size() ? kind.legend[k].c_str() : "?";
-        };
-        line("reconstruction: radius %.2f px, sum of weights %.4g, sampled here: %s", radius,
-             r.layers.get("recon_weight").data[i], origin(i));
-        const PixelFeature fi = feature_at(x, y);
-        struct Contribution {
-            int x, y;
-            double weight;
-        };
-        std::vector<Contribution> used;
-        double total = 0.0;
-        const int ri = int(std::ceil(radius));
-        for (int yy = std::max(0, y - ri); yy <= std::min(h - 1, y + ri); ++yy)
-            for (int xx = std::max(0, x - ri); xx <= std::min(w - 1, x + ri); ++xx) {
-                const size_t j = size_t(yy) * w + xx;
-                if (kind.data[j] == 0.0f ||
-                    float((xx - x) * (xx - x) + (yy - y) * (yy - y)) > radius * radius)
-                    continue;
-                const PixelFeature fj = feature_at(xx, yy);
-                if (!fj.valid || fj.object != fi.object) continue;
-                const double wgt = reconstruction_weight(fi, fj, mu.data[i], mu.data[j],
-                                                         sig.data[i], sig.data[j], config.sparse);
-                used.push_back({xx, yy, wgt});
-                total += wgt;
-            }
-        std::sort(used.begin(), used.end(),
-                  [](const Contribution& a, const Contribution& b) { return a.weight > b.weight; });
-        line("%zu radiance points on this object within the radius", used.size());
-        line("%-11s %-9s %10s %8s  %s", "pixel", "origin", "weight", "share",
-             "the point's radiance (texture included)");
-        for (size_t k = 0; k < used.size() && k < max_samples; ++k) {
-            const size_t j = size_t(used[k].y) * w + used[k].x;
-            line("(%4d,%4d) %-9s %10.4g %7.2f%%  (%.5g, %.5g, %.5g)", used[k].x, used[k].y,
-                 origin(j), used[k].weight, total > 0 ? 100.0 * used[k].weight / total : 0.0,
-                 samples.data[3 * j], samples.data[3 * j + 1], samples.data[3 * j + 2]);
-        }
-        return;
+    // Which radiance points the reconstruction used here, and with what weight (Eq. 6.2).
+    const int w = r.layers.width();
+    const Layer& kind = r.layers.get("sampled");
+    const Layer& samples = r.layers.get("samples");
+    const size_t i = size_t(c.y) * w + c.x;
+    auto origin = [&](size_t j) {
+        const size_t k = size_t(kind.data[j]);
+        return k < kind.legend.size() ? kind.legend[k].c_str() : "?";
+    };
+    ReconstructionRecord record = rebuild_reconstruction(c.rays, c.config, r, c.camera, c.x, c.y);
+    line("reconstruction: radius %.2f px, sum of weights %.4g, sampled here: %s", record.radius,
+         record.sum, origin(i));
+    std::vector<ReconstructionRecord::Contribution>& used = record.used;
+    std::stable_sort(used.begin(), used.end(),
+                     [](const auto& a, const auto& b) { return a.weight > b.weight; });
+    line("%zu radiance points on this object within the radius", used.size());
+    line("%-11s %-9s %10s %8s  %s", "pixel", "origin", "weight", "share",
+         "the point's radiance (texture included)");
+    for (size_t k = 0; k < used.size() && k < c.max_samples; ++k) {
+        const size_t j = size_t(used[k].y) * w + used[k].x;
+        line("(%4d,%4d) %-9s %10.4g %7.2f%%  (%.5g, %.5g, %.5g)", used[k].x, used[k].y, origin(j),
+             used[k].weight, record.sum > 0 ? 100.0 * used[k].weight / record.sum : 0.0,
+             samples.data[3 * j], samples.data[3 * j + 1], samples.data[3 * j + 2]);
     }
 }
 
@@ -168,6 +191,13 @@ void trace_cache(const PixelTraceContext& c, TraceLines& out) {
                                 r.layers.width(), c.config.cache, c.max_samples))
             out.push_back(s);
     trace_reconstruction(c, out);
+}
+
+ReconstructionRecord FrameRenderer::reconstruction_weights(const FrameResult& r, int x, int y) {
+    ray_scene_.update(r.time_s);
+    const CameraRayGenerator camera(ray_scene_.scene().camera.at(r.time_s), r.layers.width(),
+                                    r.layers.height());
+    return rebuild_reconstruction(ray_scene_, config_, r, camera, x, y);
 }
 
 std::vector<std::string> FrameRenderer::trace_pixel(const FrameResult& r, int x, int y,

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "render/method.h"
+#include "render/reconstruction.h"
 
 namespace freqlab {
 
@@ -13,6 +14,12 @@ void trace_direct_lighting(const PixelTraceContext& c, TraceLines& out);
 void trace_radiance_point(const PixelTraceContext& c, TraceLines& out);
 // sparse: the radiance points the reconstruction used here, with their weights (Eq. 6.2).
 void trace_reconstruction(const PixelTraceContext& c, TraceLines& out);
+// The contributions reconstruct() summed at pixel (x, y) of `r`, rebuilt from its layers, the
+// scene at the frame's time (rs updated to it) and the reused samples' positions: the weights
+// trace_reconstruction prints, equal to the render's (tested against its ReconstructionRecord).
+ReconstructionRecord rebuild_reconstruction(const RayScene& rs, const RenderConfig& config,
+                                            const FrameResult& r, const CameraRayGenerator& camera,
+                                            int x, int y);
 // cache: the cache entries at the pixel with their decisions, then the reconstruction.
 void trace_cache(const PixelTraceContext& c, TraceLines& out);
 

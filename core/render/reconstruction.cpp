@@ -22,6 +22,52 @@ double reconstruction_weight(const PixelFeature& fi, const PixelFeature& fj, flo
                       ds * ds / (2.0f * s.sigma_sigma_v * s.sigma_sigma_v)));
 }
 
+namespace {
+
+// Eq. 6.1's sums at pixel (x, y) over the samples within radius r: the weights' sum, and the
+// weighted values into *acc.
+inline double weighted_sum(const ReconstructionInput& in, int x, int y, float r,
+                           const SparseSettings& s, glm::dvec3* acc, ReconstructionRecord* record) {
+    const int w = in.width, h = in.height;
+    const size_t i = size_t(y) * w + x;
+    const PixelFeature& fi = in.features[i];
+    const int ri = int(std::ceil(r));
+    double sum_w = 0.0;
+    for (int yy = std::max(0, y - ri); yy <= std::min(h - 1, y + ri); ++yy) {
+        // Only the row's span inside the disc (the profile showed the scan of the square's
+        // corners and their feature loads).
+        const float dy = float(yy - y), room = r * r - dy * dy;
+        if (room < 0.0f) continue;
+        const int span = int(std::sqrt(room)) + 1;
+        for (int xx = std::max(0, x - span); xx <= std::min(w - 1, x + span); ++xx) {
+            const size_t j = size_t(yy) * w + xx;
+            if (!in.sampled[j]) continue;
+            const float dx = float(xx - x);
+            if (dx * dx + dy * dy > r * r) continue;
+            const PixelFeature& fj =
+                in.sample_features.empty() ? in.features[j] : in.sample_features[j];
+            if (fj.object != fi.object) continue;
+            const double weight = reconstruction_weight(fi, fj, in.mu_v[i], in.mu_v[j],
+                                                        in.sigma_v[i], in.sigma_v[j], s);
+            sum_w += weight;
+            *acc += weight * glm::dvec3(in.value[j]);
+            if (record) record->used.push_back({xx, yy, weight});
+        }
+    }
+    return sum_w;
+}
+
+}  // namespace
+
+void reconstruct_pixel_at(const ReconstructionInput& in, int x, int y, float r,
+                          const SparseSettings& s, ReconstructionRecord& record) {
+    record.used.clear();
+    glm::dvec3 acc(0.0);
+    record.sum = weighted_sum(in, x, y, r, s, &acc, &record);
+    record.radius = r;
+    record.recorded = true;
+}
+
 ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSettings& s,
                                  ReconstructionRecord* record) {
     const int w = in.width, h = in.height;
@@ -46,31 +92,8 @@ ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSett
                     record && record->x == x && record->y == y ? record : nullptr;
                 for (;;) {
                     if (here) here->used.clear();
-                    const int ri = int(std::ceil(r));
-                    double sum_w = 0.0;
                     glm::dvec3 acc(0.0);
-                    for (int yy = std::max(0, y - ri); yy <= std::min(h - 1, y + ri); ++yy) {
-                        // Only the row's span inside the disc (the profile showed the scan of
-                        // the square's corners and their feature loads).
-                        const float dy = float(yy - y), room = r * r - dy * dy;
-                        if (room < 0.0f) continue;
-                        const int span = int(std::sqrt(room)) + 1;
-                        for (int xx = std::max(0, x - span); xx <= std::min(w - 1, x + span);
-                             ++xx) {
-                            const size_t j = size_t(yy) * w + xx;
-                            if (!in.sampled[j]) continue;
-                            const float dx = float(xx - x);
-                            if (dx * dx + dy * dy > r * r) continue;
-                            const PixelFeature& fj =
-                                in.sample_features.empty() ? in.features[j] : in.sample_features[j];
-                            if (fj.object != fi.object) continue;
-                            const double weight = reconstruction_weight(
-                                fi, fj, in.mu_v[i], in.mu_v[j], in.sigma_v[i], in.sigma_v[j], s);
-                            sum_w += weight;
-                            acc += weight * glm::dvec3(in.value[j]);
-                            if (here) here->used.push_back({xx, yy, weight});
-                        }
-                    }
+                    const double sum_w = weighted_sum(in, x, y, r, s, &acc, here);
                     if (here) {
                         here->radius = r;
                         here->sum = sum_w;

@@ -54,6 +54,11 @@ struct ReconstructionRecord {
 ReconstructionOutput reconstruct(const ReconstructionInput& in, const SparseSettings& settings,
                                  ReconstructionRecord* record = nullptr);
 
+// Pixel (x, y)'s contributions at exactly radius r (the radius the render settled on): the
+// same sums reconstruct() runs, for a trace that rebuilds the inputs around one pixel.
+void reconstruct_pixel_at(const ReconstructionInput& in, int x, int y, float r,
+                          const SparseSettings& settings, ReconstructionRecord& record);
+
 // Eq. 6.2's weight of the sample at pixel j for pixel i (what reconstruct() sums; the inspector
 // lists it). Distance in units of pixel i's footprint.
 double reconstruction_weight(const PixelFeature& fi, const PixelFeature& fj, float mu_i, float mu_j,

@@ -300,6 +300,7 @@ void SparseFrame::reconstruct_image() {
         for (int i : reused) {
             const CacheRecord& r = result.cache_records[size_t(keeper[size_t(i)])];
             in.sample_features[size_t(i)].position = r.world_position;
+            result.moved_samples.emplace_back(i, r.world_position);
         }
     }
     rec = reconstruct(in, sparse, record);

@@ -28,6 +28,9 @@ struct SparsePassOutput {
     nlohmann::json
         stats;  // pixels_initial, pixels_adaptive, pixels_shaded, fallback_pixels, stage ms
     std::vector<CacheRecord> cache_records;  // with the cache: every entry's decision
+    // With the cache: the reused samples (pixel, position) whose position is their entry's,
+    // not their pixel's (what the reconstruction weighed them at).
+    std::vector<std::pair<int, vec3>> moved_samples;
 };
 
 // With a cache (`--method cache`) the pipeline reuses, discards and inserts entries at the
