@@ -84,6 +84,111 @@ float variance_of_mean(const std::vector<vec3>& units, int n) {
     return float(m2 / (n - 1) / n);
 }
 
+// The estimate's samples before any ray: the uniforms of the environment, quad-light and BRDF
+// samples (drawn in the order the unit loop consumes them), their directions, texels, values,
+// pdfs, MIS weights and factors, staged so that the texels' cache misses overlap.
+void draw_samples(Scratch& s, const EnvironmentMap* env, const std::vector<const Light*>& lights,
+                  bool quad_lights, SampleSequence sequence, const BrdfBatch& lobe, const vec3& ns,
+                  CounterRng& rng, int n_env, int n_units, int n_brdf) {
+    // Stratified: the strategies' sequences are seeded from the stream first (the independent
+    // path draws nothing here, so its numbers are what they always were).
+    const bool sobol = sequence == SampleSequence::ScrambledSobol;
+    uint32_t seeds[4] = {0, 0, 0, 0};
+    if (sobol)
+        for (uint32_t& seed : seeds) seed = rng.next_u32();
+    const ScrambledSobol2D env_points(seeds[0], seeds[1]), brdf_points(seeds[2], seeds[3]);
+
+    // The random numbers first (same order as drawing them inside the loop), so that the
+    // environment's table reads of all samples can be in flight together.
+    SampleArrays& e = s.env;  // its texels: e.texel
+    s.env_u.clear();
+    s.light_u.clear();
+    if (env && sobol) {
+        // CDF inversion in stages across all samples (each stage prefetches the next's reads).
+        s.inversions.clear();
+        for (int i = 0; i < n_env; ++i)
+            s.inversions.push_back(env->invert_begin(env_points.at(uint32_t(i))));
+        for (Distribution2D::Inversion& inv : s.inversions) env->invert_guide(inv);
+        for (size_t i = 0; i < s.inversions.size(); ++i) {
+            Distribution2D::Inversion& inv = s.inversions[i];
+            e.texel[i] = env->invert_finish(inv);
+            env->prefetch_texel(e.texel[i]);
+            // The texel is chosen; only zw (the place inside it) are read from here on.
+            s.env_u.emplace_back(0.0f, 0.0f, inv.within);
+        }
+    }
+    if (env && !sobol && !quad_lights) {
+        // Without quad lights the environment's uniforms are one block of the stream: drawn in
+        // one vectorized call, in the same order as the loop below.
+        s.uniforms.resize(size_t(4 * n_env));
+        rng.fill_floats(s.uniforms.data(), 4 * n_env);
+        for (int i = 0; i < n_env; ++i) {
+            const float* f = &s.uniforms[size_t(4 * i)];
+            s.env_u.emplace_back(f[0], f[1], f[2], f[3]);
+            env->prefetch_alias(s.env_u.back());
+        }
+    } else
+        for (int i = 0; i < n_units; ++i) {
+            if (env && !sobol) {
+                const vec4 u(rng.next_float(), rng.next_float(), rng.next_float(),
+                             rng.next_float());
+                s.env_u.push_back(u);
+                env->prefetch_alias(u);
+            }
+            for (const Light* l : lights)
+                if (light_sample_dimensions(*l) == 2) {
+                    const float u1 = rng.next_float(), u2 = rng.next_float();
+                    s.light_u.emplace_back(u1, u2);
+                }
+        }
+    // The BRDF samples next: their directions and texels are computed while the alias
+    // entries load, and their texels load while the environment samples are computed.
+    SampleArrays& b = s.brdf;
+    if (sobol) {
+        for (int j = 0; j < n_brdf; ++j) {
+            const vec2 u = brdf_points.at(uint32_t(j));
+            b.u1[size_t(j)] = u.x;
+            b.u2[size_t(j)] = u.y;
+        }
+    } else {
+        s.uniforms.resize(size_t(2 * n_brdf));
+        rng.fill_floats(s.uniforms.data(), 2 * n_brdf);
+        for (int j = 0; j < n_brdf; ++j) {
+            b.u1[size_t(j)] = s.uniforms[size_t(2 * j)];
+            b.u2[size_t(j)] = s.uniforms[size_t(2 * j + 1)];
+        }
+    }
+    if (n_brdf > 0) {
+        lobe.sample(n_brdf, b.u1.data(), b.u2.data(), b.x.data(), b.y.data(), b.z.data(),
+                    b.value.data(), b.pdf.data());
+        env->lookup_texels(n_brdf, b.x.data(), b.y.data(), b.z.data(), b.texel.data(),
+                           b.sin_theta.data());
+    }
+    if (env && !sobol) {
+        for (size_t i = 0; i < s.env_u.size(); ++i) {
+            e.texel[i] = env->sample_texel(s.env_u[i]);
+            env->prefetch_texel(e.texel[i]);
+        }
+    }
+    if (n_env > 0) {
+        env->sample_directions(n_env, e.texel.data(), s.env_u.data(), e.x.data(), e.y.data(),
+                               e.z.data(), e.sin_theta.data());
+        lobe.eval(n_env, e.x.data(), e.y.data(), e.z.data(), e.value.data(), e.other_pdf.data());
+    }
+    // Now the texels' radiance and densities, then each sample's MIS weight and its scalar
+    // factor f/albedo x cos x w / pdf (0: no ray).
+    if (n_brdf > 0) {
+        env->texel_values(n_brdf, b.texel.data(), b.sin_theta.data(), b.other_pdf.data(),
+                          b.radiance.data());
+        b.weigh(n_brdf, ns, float(n_brdf), float(n_env));
+    }
+    if (n_env > 0) {
+        env->texel_values(n_env, e.texel.data(), e.sin_theta.data(), e.pdf.data(),
+                          e.radiance.data());
+        e.weigh(n_env, ns, float(n_env), float(n_brdf));
+    }
+}
+
 }  // namespace
 
 DirectLighting::DirectLighting(const RayScene& scene, const ShadingSettings& settings,
@@ -166,103 +271,10 @@ RadianceEstimate DirectLighting::estimate(const ShadingPoint& sp, int spp, Count
                                            other_pdf, w, value, false});
     };
 
-    // Stratified: the strategies' sequences are seeded from the stream first (the independent
-    // path draws nothing here, so its numbers are what they always were).
-    const bool sobol = sequence_ == SampleSequence::ScrambledSobol;
-    uint32_t seeds[4] = {0, 0, 0, 0};
-    if (sobol)
-        for (uint32_t& seed : seeds) seed = rng.next_u32();
-    const ScrambledSobol2D env_points(seeds[0], seeds[1]), brdf_points(seeds[2], seeds[3]);
-
-    // The random numbers first (same order as drawing them inside the loop), so that the
-    // environment's table reads of all samples can be in flight together.
-    SampleArrays& e = s.env;  // its texels: e.texel
-    s.env_u.clear();
-    s.light_u.clear();
-    if (environment_ && sobol) {
-        // CDF inversion in stages across all samples (each stage prefetches the next's reads).
-        s.inversions.clear();
-        for (int i = 0; i < n_env; ++i)
-            s.inversions.push_back(environment_->invert_begin(env_points.at(uint32_t(i))));
-        for (Distribution2D::Inversion& inv : s.inversions) environment_->invert_guide(inv);
-        for (size_t i = 0; i < s.inversions.size(); ++i) {
-            Distribution2D::Inversion& inv = s.inversions[i];
-            e.texel[i] = environment_->invert_finish(inv);
-            environment_->prefetch_texel(e.texel[i]);
-            // The texel is chosen; only zw (the place inside it) are read from here on.
-            s.env_u.emplace_back(0.0f, 0.0f, inv.within);
-        }
-    }
-    if (environment_ && !sobol && !quad_lights_) {
-        // Without quad lights the environment's uniforms are one block of the stream: drawn in
-        // one vectorized call, in the same order as the loop below.
-        s.uniforms.resize(size_t(4 * n_env));
-        rng.fill_floats(s.uniforms.data(), 4 * n_env);
-        for (int i = 0; i < n_env; ++i) {
-            const float* f = &s.uniforms[size_t(4 * i)];
-            s.env_u.emplace_back(f[0], f[1], f[2], f[3]);
-            environment_->prefetch_alias(s.env_u.back());
-        }
-    } else
-        for (int i = 0; i < n_units; ++i) {
-            if (environment_ && !sobol) {
-                const vec4 u(rng.next_float(), rng.next_float(), rng.next_float(),
-                             rng.next_float());
-                s.env_u.push_back(u);
-                environment_->prefetch_alias(u);
-            }
-            for (const Light* l : lights_)
-                if (light_sample_dimensions(*l) == 2) {
-                    const float u1 = rng.next_float(), u2 = rng.next_float();
-                    s.light_u.emplace_back(u1, u2);
-                }
-        }
-    // The BRDF samples next: their directions and texels are computed while the alias
-    // entries load, and their texels load while the environment samples are computed.
-    SampleArrays& b = s.brdf;
-    if (sobol) {
-        for (int j = 0; j < n_brdf; ++j) {
-            const vec2 u = brdf_points.at(uint32_t(j));
-            b.u1[size_t(j)] = u.x;
-            b.u2[size_t(j)] = u.y;
-        }
-    } else {
-        s.uniforms.resize(size_t(2 * n_brdf));
-        rng.fill_floats(s.uniforms.data(), 2 * n_brdf);
-        for (int j = 0; j < n_brdf; ++j) {
-            b.u1[size_t(j)] = s.uniforms[size_t(2 * j)];
-            b.u2[size_t(j)] = s.uniforms[size_t(2 * j + 1)];
-        }
-    }
-    if (n_brdf > 0) {
-        lobe.sample(n_brdf, b.u1.data(), b.u2.data(), b.x.data(), b.y.data(), b.z.data(),
-                    b.value.data(), b.pdf.data());
-        environment_->lookup_texels(n_brdf, b.x.data(), b.y.data(), b.z.data(), b.texel.data(),
-                                    b.sin_theta.data());
-    }
-    if (environment_ && !sobol) {
-        for (size_t i = 0; i < s.env_u.size(); ++i) {
-            e.texel[i] = environment_->sample_texel(s.env_u[i]);
-            environment_->prefetch_texel(e.texel[i]);
-        }
-    }
-    if (n_env > 0) {
-        environment_->sample_directions(n_env, e.texel.data(), s.env_u.data(), e.x.data(),
-                                        e.y.data(), e.z.data(), e.sin_theta.data());
-        lobe.eval(n_env, e.x.data(), e.y.data(), e.z.data(), e.value.data(), e.other_pdf.data());
-    }
-    // Now the texels' radiance and densities, then each sample's MIS weight and its scalar
-    // factor f/albedo x cos x w / pdf (0: no ray).
-    if (n_brdf > 0) {
-        environment_->texel_values(n_brdf, b.texel.data(), b.sin_theta.data(), b.other_pdf.data(),
-                                   b.radiance.data());
-        b.weigh(n_brdf, ns, float(n_brdf), float(n_env));
-    }
-    if (n_env > 0) {
-        environment_->texel_values(n_env, e.texel.data(), e.sin_theta.data(), e.pdf.data(),
-                                   e.radiance.data());
-        e.weigh(n_env, ns, float(n_env), float(n_brdf));
-    }
+    draw_samples(s, environment_, lights_, quad_lights_, sequence_, lobe, ns, rng, n_env, n_units,
+                 n_brdf);
+    const SampleArrays& e = s.env;
+    const SampleArrays& b = s.brdf;
 
     // The shadow rays, in the order of the units: environment sample i, the lights' unit i,
     // then the BRDF samples.
