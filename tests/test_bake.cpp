@@ -114,14 +114,18 @@ TEST(Bake, ExtinctionMatchesTheClosedForm) {
 
 // Without media every method bakes the same light: surface, extinction and impulse exactly
 // (same random numbers), VPT within its confidence interval (t-test on the mean).
-TEST(Bake, WithoutMediaAllMethodsAgree) {
-    Fixture f(R"({"frames": 1, "camera": {"position": [0, -5, 3], "look_at": [0, 0, 0]},
+// A plane and a box (two lightmaps) under a point light and a constant sky, no media.
+const char* const kPlaneAndBox =
+    R"({"frames": 1, "camera": {"position": [0, -5, 3], "look_at": [0, 0, 0]},
       "materials": {"m": {"type": "lambert", "albedo": 0.7}},
       "objects": [{"shape": {"type": "plane", "size": [4, 4]}, "material": "m"},
                   {"shape": {"type": "box", "size": [1, 1, 1]}, "material": "m",
                    "transform": {"translate": [0.8, 0, 0.5]}}],
       "lights": [{"type": "point", "position": [-0.5, -0.5, 2.0], "intensity": 8},
-                 {"type": "envmap", "radiance": 0.3}]})");
+                 {"type": "envmap", "radiance": 0.3}]})";
+
+TEST(Bake, WithoutMediaAllMethodsAgree) {
+    Fixture f(kPlaneAndBox);
     ASSERT_TRUE(f.media.empty());
     BakeSettings s;
     s.bounces = 2;
@@ -395,13 +399,7 @@ TEST(Bake, ProbesSeeAConstantEnvironmentAndAgreeInFog) {
 // (texel_random): on a lightmap other than the first, texel_estimate is what the bake stored
 // there. Keyed as lightmap 0 (the bug this guards against) it is not.
 TEST(Bake, TexelEstimateIsWhatTheBakeStoredOnEveryLightmap) {
-    Fixture f(R"({"frames": 1, "camera": {"position": [0, -5, 3], "look_at": [0, 0, 0]},
-      "materials": {"m": {"type": "lambert", "albedo": 0.7}},
-      "objects": [{"shape": {"type": "plane", "size": [4, 4]}, "material": "m"},
-                  {"shape": {"type": "box", "size": [1, 1, 1]}, "material": "m",
-                   "transform": {"translate": [0.8, 0, 0.5]}}],
-      "lights": [{"type": "point", "position": [-0.5, -0.5, 2.0], "intensity": 8},
-                 {"type": "envmap", "radiance": 0.3}]})");
+    Fixture f(kPlaneAndBox);
     BakeSettings s;
     s.spp = 4;
     s.bounces = 1;

@@ -28,19 +28,13 @@ void add_line(TraceLines& out, const char* format, Args... args) {
 
 void trace_direct_lighting(const PixelTraceContext& c, TraceLines& out) {
     auto line = [&out](const char* format, auto... args) { add_line(out, format, args...); };
-    [[maybe_unused]] const RenderConfig& config = c.config;
-    [[maybe_unused]] const RayScene& rs = c.rays;
-    [[maybe_unused]] const FrameResult& r = c.result;
-    [[maybe_unused]] const int x = c.x, y = c.y;
-    [[maybe_unused]] const CameraRayGenerator& cam = c.camera;
-    [[maybe_unused]] const ShadingPoint& sp = c.point;
-    [[maybe_unused]] const size_t max_samples = c.max_samples;
-    DirectLighting lighting(rs, config.shading, config.sequence());
+    const size_t max_samples = c.max_samples;
+    DirectLighting lighting(c.rays, c.config.shading, c.config.sequence());
     std::vector<DirectLighting::SampleTrace> samples;
     lighting.trace_samples(&samples);
-    CounterRng rng(uint64_t(config.frame.seed) ^ kShadingStream, uint64_t(r.frame),
-                   size_t(y) * r.layers.width() + x, 0);
-    const RadianceEstimate e = lighting.estimate(sp, config.spp(), rng);
+    CounterRng rng(uint64_t(c.config.frame.seed) ^ kShadingStream, uint64_t(c.result.frame),
+                   size_t(c.y) * c.result.layers.width() + c.x, 0);
+    const RadianceEstimate e = lighting.estimate(c.point, c.config.spp(), rng);
     line("estimate (%.6g, %.6g, %.6g), variance %.4g, %ld shadow rays, %zu candidate samples",
          e.radiance.x, e.radiance.y, e.radiance.z, e.variance, e.rays, samples.size());
     line("%-5s %4s %-26s %10s %10s %7s %-30s %s", "strat", "unit", "direction", "pdf", "other_pdf",
@@ -57,19 +51,17 @@ void trace_direct_lighting(const PixelTraceContext& c, TraceLines& out) {
 
 void trace_radiance_point(const PixelTraceContext& c, TraceLines& out) {
     auto line = [&out](const char* format, auto... args) { add_line(out, format, args...); };
-    [[maybe_unused]] const RenderConfig& config = c.config;
-    [[maybe_unused]] const RayScene& rs = c.rays;
-    [[maybe_unused]] const FrameResult& r = c.result;
-    [[maybe_unused]] const int x = c.x, y = c.y;
-    [[maybe_unused]] const CameraRayGenerator& cam = c.camera;
-    [[maybe_unused]] const ShadingPoint& sp = c.point;
-    [[maybe_unused]] const size_t max_samples = c.max_samples;
+    const RenderConfig& config = c.config;
+    const FrameResult& r = c.result;
+    const int x = c.x, y = c.y;
+    const CameraRayGenerator& cam = c.camera;
     const SurfaceHit& hit = c.hit;
     {
         // The radiance point's whole chain, with the render's seed keys and G-buffer context.
         auto hit_at = [&](int px, int py) {
-            return rs.intersect(Ray{cam.origin, cam.direction((px + 0.5f) / r.layers.width(),
-                                                              (py + 0.5f) / r.layers.height())});
+            return c.rays.intersect(Ray{
+                cam.origin,
+                cam.direction((px + 0.5f) / r.layers.width(), (py + 0.5f) / r.layers.height())});
         };
         SurfaceHit neighbours[4];
         int count = 0;
@@ -83,11 +75,12 @@ void trace_radiance_point(const PixelTraceContext& c, TraceLines& out) {
         ctx.time = r.time_s;
         ctx.object = hit.object;
         line("screen-space curvature k = %.5g, eye distance %.5g", ctx.curvature, ctx.eye_distance);
-        const RadiancePointIntegrator integrator(rs, config.shading, config.points, c.bandwidth);
+        const RadiancePointIntegrator integrator(c.rays, config.shading, config.points,
+                                                 c.bandwidth);
         CounterRng rng(uint64_t(config.frame.seed) ^ kPointsStream, uint64_t(r.frame),
                        size_t(y) * r.layers.width() + x, 0);
         std::vector<std::string> chain;
-        const RadiancePoint rp = integrator.integrate(sp, ctx, rng, &chain);
+        const RadiancePoint rp = integrator.integrate(c.point, ctx, rng, &chain);
         if (c.radiance_point) *c.radiance_point = rp;
         out.insert(out.end(), chain.begin(), chain.end());
         return;
