@@ -339,10 +339,7 @@ ZhVector SingleScatterTable::single(const HomogeneousMedium& m, double distance,
                   return c;
               });
     if (collapsed) {
-        for (int k = 0; k < 4; ++k) {
-            const double* row = &(*collapsed)[size_t(st.bin[k]) * kImpulseOrder];
-            for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += st.weight[k] * row[l];
-        }
+        ZhDistanceTable::interpolate_rows(st, collapsed->data(), z.data());
     } else {
         double gk = 1.0;
         for (size_t j = 0; j < nt && std::fabs(gk) > 1e-10; ++j, gk *= m.g)

@@ -92,6 +92,14 @@ class ZhDistanceTable {
     };
     static Stencil stencil(Trend trend, double optical_distance);
     // sum_k weight[k] value(bin[k]): any per-bin quantity on the same grid.
+    // z[l] += sum_k weight[k] rows[bin[k]][l], l < kImpulseOrder: a table of ZH rows (one per
+    // bin, row-major) interpolated into z.
+    static void interpolate_rows(const Stencil& st, const double* rows, double* z) {
+        for (int k = 0; k < 4; ++k) {
+            const double* row = rows + size_t(st.bin[k]) * kImpulseOrder;
+            for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += st.weight[k] * row[l];
+        }
+    }
     template <class Value>
     static double interpolate(const Stencil& st, Value value) {
         double v = 0.0;

@@ -127,10 +127,7 @@ ZhVector PointMultipleScatter::bounces_in(const HomogeneousMedium& m, double dis
             return out;
         });
     if (collapsed) {
-        for (int j = 0; j < 4; ++j) {
-            const double* row = &(*collapsed)[size_t(st.bin[j]) * kImpulseOrder];
-            for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += st.weight[j] * row[l];
-        }
+        ZhDistanceTable::interpolate_rows(st, collapsed->data(), z.data());
     } else {
         const double first_weight = std::pow(c, first);
         for (int j = 0; j < 4; ++j) {
