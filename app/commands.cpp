@@ -3,6 +3,8 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <charconv>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -27,13 +29,25 @@ namespace freqlab {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+int parse_count(const std::string& text, const std::string& flag, const std::string& whole) {
+    int value = 0;
+    const char* end = text.data() + text.size();
+    const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+    if (text.empty() || ec == std::errc::invalid_argument || ptr != end || value < 0)
+        throw Error(flag, whole.empty() ? text : whole, "expected a whole number >= 0");
+    if (ec == std::errc::result_out_of_range)
+        throw Error(flag, whole.empty() ? text : whole,
+                    "expected a number up to " + std::to_string(INT_MAX));
+    return value;
+}
+
 std::pair<int, int> parse_frame_range(const std::string& text, int frame_count) {
     std::smatch m;
     int a = 0, b = 0;
     if (std::regex_match(text, m, std::regex(R"((\d+):(\d+))"))) {
-        a = std::stoi(m[1]), b = std::stoi(m[2]);
+        a = parse_count(m[1], "--frames", text), b = parse_count(m[2], "--frames", text);
     } else if (std::regex_match(text, m, std::regex(R"((\d+))"))) {
-        a = std::stoi(m[1]), b = a + 1;
+        a = parse_count(m[1], "--frames", text), b = a + 1;
     } else {
         throw Error("--frames", text, "expected A:B (frames A to B-1) or a single frame N");
     }
@@ -61,7 +75,8 @@ std::pair<int, int> parse_pixel(const std::string& text, int w, int h) {
     std::smatch m;
     if (!std::regex_match(text, m, std::regex(R"((\d+),(\d+))")))
         throw Error("--debug-pixel", text, "expected X,Y");
-    const int x = std::stoi(m[1]), y = std::stoi(m[2]);
+    const int x = parse_count(m[1], "--debug-pixel", text),
+              y = parse_count(m[2], "--debug-pixel", text);
     if (x >= w || y >= h)
         throw Error("--debug-pixel", text,
                     "outside the image (" + std::to_string(w) + "x" + std::to_string(h) + ")");

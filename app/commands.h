@@ -90,6 +90,9 @@ int run_tables_query(const TablesQueryArgs& args);
 int run_tables_generate(const std::string& out, int bounces);
 constexpr int kDefaultTableBounces = 30;
 
+// A whole number >= 0 given to `flag` (`whole`: the full value quoted in the error, when
+// `text` is part of it); throws Error naming the flag, never std::stoi's "stoi".
+int parse_count(const std::string& text, const std::string& flag, const std::string& whole = "");
 // Frames "A:B" → [A, B); "N" → [N, N+1). Throws Error naming --frames.
 std::pair<int, int> parse_frame_range(const std::string& text, int frame_count);
 // "WxH" → (W, H).

@@ -211,7 +211,7 @@ int main(int argc, char** argv) {
                 2)
                 throw freqlab::Error("--inspect", gui_inspect, "expected X,Y");
         }
-        if (!gui_warm.empty()) options.warm_from = std::stoi(gui_warm);
+        if (!gui_warm.empty()) options.warm_from = freqlab::parse_count(gui_warm, "--warm-from");
         if (!gui_size.empty()) {
             const auto [w, h] = freqlab::parse_size(gui_size, "--size");
             options.width = w, options.height = h;
