@@ -8,6 +8,7 @@
 #include "base/error.h"
 #include "commands.h"
 #include "render/method.h"
+#include "volume/bake_estimators.h"
 #include "volume/impulse_query.h"
 #ifdef FREQLAB_HAS_UI
 #include "workbench.h"
@@ -139,7 +140,7 @@ int main(int argc, char** argv) {
     freqlab::BakeArgs bk;
     auto* bake = app.add_subcommand("bake", "method B: lightmap baking with participating media");
     bake->add_option("scene", bk.scene, "scene file");
-    bake->add_option("--method", bk.method, "surface|extinction|impulse|vpt");
+    bake->add_option("--method", bk.method, freqlab::bake_method_list());
     bake->add_option("--spp", bk.spp, "paths per texel (bake.spp)");
     bake->add_option("--seed", bk.seed, "random seed (bake.seed)");
     bake->add_option("--threads", bk.threads, "worker threads (0 = all cores)");

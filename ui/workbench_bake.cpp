@@ -37,10 +37,6 @@ void BakeSessionDeleter::operator()(BakeSession* b) const {
     delete b;
 }
 
-bool is_bake_method(const std::string& name) {
-    return name == "surface" || name == "extinction" || name == "impulse" || name == "vpt";
-}
-
 void make_bake_session(Workbench::State& s, const std::string& method,
                        const std::vector<std::string>& assignments) {
     BakeSessionPtr b(new BakeSession);
@@ -150,8 +146,8 @@ void draw_bake_panel(Workbench::State& s) {
     }
     bool restart = false;
     int method = int(b.method);
-    if (ImGui::Combo("bake method", &method, "surface\0extinction\0impulse\0vpt\0") &&
-        method != int(b.method)) {
+    const std::string methods = bake_method_list(std::string(1, '\0')) + '\0';
+    if (ImGui::Combo("bake method", &method, methods.c_str()) && method != int(b.method)) {
         stop_bake_jobs(s);
         b.method = BakeMethod(method);
         b.baker_dirty = true;

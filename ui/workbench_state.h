@@ -90,7 +90,6 @@ struct Workbench::State {
     BakeSessionPtr bake;     // set when the method is a bake method (surface ... vpt)
 };
 
-bool is_bake_method(const std::string& name);
 // Throws Error on a bad bake setting; needs s.scene and s.device.
 void make_bake_session(Workbench::State& s, const std::string& method,
                        const std::vector<std::string>& assignments);

@@ -305,7 +305,7 @@ void Workbench::load_session(const std::string& path) {
         std::find(render_methods.begin(), render_methods.end(), o.method) == render_methods.end()) {
         std::string list;
         for (const std::string& m : render_methods) list += m + ", ";
-        method.fail("expected one of " + list + "surface, extinction, impulse, vpt");
+        method.fail("expected one of " + list + bake_method_list(", "));
     }
     o.frame = r.get("frame").integer_in(0, 1 << 30);
     o.layer = r.get("layer").string();

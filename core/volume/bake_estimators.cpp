@@ -46,11 +46,28 @@ const char* to_string(BakeMethod m) {
     return "?";
 }
 
+const std::vector<BakeMethod>& bake_methods() {
+    static const std::vector<BakeMethod> all = {BakeMethod::Surface, BakeMethod::Extinction,
+                                                BakeMethod::Impulse, BakeMethod::Vpt};
+    return all;
+}
+
+std::string bake_method_list(const std::string& separator) {
+    std::string list;
+    for (BakeMethod m : bake_methods()) list += (list.empty() ? "" : separator) + to_string(m);
+    return list;
+}
+
+bool is_bake_method(const std::string& name) {
+    for (BakeMethod m : bake_methods())
+        if (name == to_string(m)) return true;
+    return false;
+}
+
 BakeMethod parse_bake_method(const std::string& text) {
-    for (BakeMethod m :
-         {BakeMethod::Surface, BakeMethod::Extinction, BakeMethod::Impulse, BakeMethod::Vpt})
+    for (BakeMethod m : bake_methods())
         if (text == to_string(m)) return m;
-    throw Error("--method", text, "expected surface, extinction, impulse or vpt");
+    throw Error("--method", text, "expected one of: " + bake_method_list(", "));
 }
 
 BakeEstimator::BakeEstimator(const RayScene& scene, const Media& media, const ImpulseTables* tables,

@@ -40,6 +40,10 @@ namespace freqlab {
 enum class BakeMethod { Surface, Extinction, Impulse, Vpt };
 const char* to_string(BakeMethod m);
 BakeMethod parse_bake_method(const std::string& text);  // throws Error naming --method
+// Every bake method in enum order, and them joined by `separator` (help texts, menus).
+const std::vector<BakeMethod>& bake_methods();
+std::string bake_method_list(const std::string& separator = "|");
+bool is_bake_method(const std::string& name);
 
 struct IrradianceParts {
     vec3 surface{0.0f}, single{0.0f}, multiple{0.0f};
