@@ -409,7 +409,8 @@ TEST(Bake, TexelEstimateIsWhatTheBakeStoredOnEveryLightmap) {
     ASSERT_EQ(baker.lightmaps().size(), 2u);
     const size_t box = 1;
     const ObjectLightmap& map = baker.lightmaps()[box];
-    const Layer& stored = baker.layers(box).get("lm_irradiance");
+    const LayerSet baked = baker.layers(box);
+    const Layer& stored = baked.get("lm_irradiance");
     const BakeEstimator estimator(*f.rays, f.media, nullptr, BakeMethod::Surface, s);
     int checked = 0, differs_as_lightmap0 = 0;
     for (size_t i = 0; i < map.texels.size() && checked < 40; i += 7) {
