@@ -23,8 +23,17 @@ const SettingsSchema& BakeSettings::schema() {
                    kInvalidatesBake,
                    "Impulse: up to which path vertex (0 = the texel itself) an occluded or "
                    "below-horizon emitter connection still brings the light scattered by the lit "
-                   "medium around the vertex (one point along a cosine-sampled direction, 2 "
-                   "shadow rays); -1: none, as the seed (§5.2: unoccluded connections only).")
+                   "medium around the vertex (single: one point along a cosine-sampled "
+                   "direction, 2 shadow rays; order 2: one more point by phase sampling, 2 rays; "
+                   "orders 3+: the tables' unoccluded); -1: none, as the seed (§5.2: unoccluded "
+                   "connections only).")
+            .field(&BakeSettings::hidden_surface_light, "hidden_surface_light", 0, 1, "",
+                   kInvalidatesBake,
+                   "Impulse: the texel also gets the light of surfaces it cannot see (a coplanar "
+                   "floor, what an occluder hides), scattered in the medium in front of it: one "
+                   "medium point, a phase-sampled ray to a surface and that surface's direct "
+                   "light with its tables (single exactly; orders 2+ by the in-medium area "
+                   "response there). Needs bake.bounces >= 1 and lit_medium_depth >= 0.")
             .field(&BakeSettings::texel_density, "texel_density", 0.01, 4096, "texels/unit",
                    kInvalidatesBake, "Lightmap resolution: texels per scene unit.")
             .field(&BakeSettings::max_size, "max_size", 16, 8192, "texels", kInvalidatesBake,

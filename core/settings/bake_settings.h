@@ -21,6 +21,9 @@ struct BakeSettings {
     // Impulse: path vertices (0 = the texel) whose occluded emitter connections get the light
     // scattered by the lit medium around them; -1: none (the seed's §5.2).
     int lit_medium_depth = 0;
+    // Impulse, at the texel: light of surfaces it cannot see (a coplanar floor, what lies
+    // behind an occluder) scattered in the medium in front of it (issue "Method B, part 3").
+    bool hidden_surface_light = true;
     float texel_density = 16.0f;  // texels per scene unit
     int max_size = 1024;          // atlas side limit
     int padding = 2;              // gutter texels per chart

@@ -74,7 +74,7 @@ class BakeEstimator {
         bool known = false;
         IrradianceParts parts;
         // Impulse: the point and directional lights whose connection is occluded, with the
-        // multiple scattering of their unoccluded response; their lit-medium estimate
+        // orders 3+ of their unoccluded response; their lit-medium estimate
         // (lit_medium_single) draws random numbers, so it runs on every path.
         std::vector<std::pair<int, vec3>> occluded;
     };
@@ -115,14 +115,64 @@ class BakeEstimator {
     // pi T(p, x_t) sigma_s(x_t) f_HG E(x_t) T(x_t, emitter) V / pdf(t), unbiased for single
     // scattering through the real (heterogeneous, bounded) media and geometry.
     struct LitMediumSample {
-        bool in_medium = false;  // a point was drawn inside the media
-        bool lit = false;        // it sees the emitter and the receiver
-        vec3 single{0.0f};       // the irradiance estimate
+        bool in_medium = false;   // a point was drawn inside the media
+        bool seen = false;        // it sees the receiver
+        bool lit = false;         // it sees the emitter and the receiver
+        vec3 single{0.0f};        // the irradiance estimate
+        bool second_lit = false;  // its second-scattering point sees the emitter
+        vec3 multiple{0.0f};      // order 2 through it (second_scatter)
     };
+    // An emitter sample seen from a point x (emitter: its point, unused for distant ones).
+    struct EmitterSeen {
+        bool valid = false;
+        vec3 l{0.0f};                                               // towards the emitter
+        double distance = std::numeric_limits<double>::infinity();  // shadow ray length
+        double to_emitter = 0.0;  // the transmittance's length (media exit for distant)
+        vec3 strength{0.0f};      // what reaches x before the medium (E0, or I / d^2 x emission)
+    };
+    EmitterSeen emitter_seen(const EmitterSample& s, const vec3& emitter, const vec3& x) const;
+    // Light scattered twice, the second time at x, towards the receiver (along -w): one more
+    // point x2 by HG sampling about w and a free flight through the real media and geometry,
+    // NEE from x2 to the emitter. radiance x sigma_s(x) is unbiased for order 2 through x.
+    struct SecondScatter {
+        bool lit = false;  // x2 exists and sees the emitter
+        vec3 radiance{0.0f};
+    };
+    SecondScatter second_scatter(const EmitterSample& s, const vec3& emitter, const vec3& x,
+                                 const vec3& w, const HomogeneousMedium& here, CounterRng& rng,
+                                 BakeCounters& counters) const;
     struct OccludedConnection {
         bool occluded = false;
-        vec3 multiple{0.0f};  // the unoccluded response's multiple scattering
+        vec3 multiple{0.0f};  // the unoccluded response's orders 3 and up
     };
+    // A point x = o + t w of the media in front of the receiver: w cosine-sampled about n, t by
+    // a free flight at the ray's mean extinction or, given an emitter point, equiangular about
+    // it; pdf is t's. check_path: geometry may lie between o and x.
+    struct MediumPoint {
+        bool valid = false;
+        vec3 o{0.0f}, w{0.0f}, x{0.0f};
+        double t = 0.0, pdf = 0.0;
+        bool check_path = true;
+        HomogeneousMedium here{0.0, 0.0, 0.0};
+    };
+    MediumPoint draw_medium_point(const vec3& p, const vec3& n, const vec3* emitter,
+                                  CounterRng& rng, BakeCounters& counters) const;
+    bool sees_receiver(const MediumPoint& m, BakeCounters& counters) const;
+    // Light reflected by surfaces the receiver cannot see, scattered once in the medium in
+    // front of it towards it: x by draw_medium_point, HG sampling at x to a surface y, y's
+    // radiance from its own direct light and the media's response (the last vertex of a
+    // surface path). Irradiance, unbiased for that order of y's radiance.
+    struct ScatteredSurfaceLight {
+        vec3 single{0.0f}, multiple{0.0f};
+    };
+    ScatteredSurfaceLight surface_light_scattered(const vec3& p, const vec3& n, CounterRng& rng,
+                                                  BakeCounters& counters) const;
+    // sigma_s-less radiance scattered at a medium point towards -w of the in-medium response
+    // there to a differential-area emitter seen along l at `distance` (orders >= 1 of its
+    // light before the point): the phase (anisotropy g_here) convolved with the response.
+    vec3 area_response_rescattered(const vec3& intensity, const vec3& l, double distance,
+                                   const vec3& emitter_normal, const SegmentOptics& optics,
+                                   double g_here, const vec3& w, BakeCounters& counters) const;
     LitMediumSample lit_medium_single(const EmitterSample& s, const vec3& p, const vec3& n,
                                       CounterRng& rng, BakeCounters& counters) const;
     // The tables' scattered response for the connection as if it were unoccluded, at a
@@ -133,6 +183,10 @@ class BakeEstimator {
     IrradianceParts unoccluded_scatter(const EmitterSample& s, const vec3& p, const vec3& n,
                                        float albedo_lum, CounterRng& rng,
                                        BakeCounters& counters) const;
+    // The tables' scattering orders 3 and up for the connection as if it were unoccluded (order
+    // 2 of an occluded connection is second_scatter's).
+    vec3 unoccluded_higher_orders(const EmitterSample& s, const vec3& p, const vec3& n,
+                                  float albedo_lum, CounterRng& rng, BakeCounters& counters) const;
     void sample_emitters(const vec3& p, CounterRng& rng, std::vector<EmitterSample>& out) const;
     IrradianceParts surface_path(const vec3& p, const vec3& n, const vec3& albedo, int depth,
                                  CounterRng& rng, BakeCounters& counters,
@@ -140,14 +194,14 @@ class BakeEstimator {
     // Direct light of one emitter sample at (p, n): visibility, transmittance and, for impulse,
     // its scattered response, added to parts.
     // Returns false when the connection is occluded or below the horizon; then, for impulse,
-    // *occluded_multiple (when given) is the multiple scattering of its unoccluded response.
+    // *occluded_multiple (when given) is the unoccluded response's orders 3 and up.
     bool direct_light(const EmitterSample& s, const vec3& p, const vec3& n, float albedo_lum,
                       CounterRng& rng, BakeCounters& counters, IrradianceParts& parts,
                       vec3* occluded_multiple = nullptr) const;
     // The lit-medium estimate of an occluded connection, added to parts: its single
-    // scattering, and the unoccluded multiple scattering where its point is lit.
+    // scattering and order 2 (lit_medium_single), and the unoccluded orders 3 and up.
     void add_lit_medium(const EmitterSample& s, const vec3& p, const vec3& n,
-                        const vec3& unoccluded_multiple, CounterRng& rng, BakeCounters& counters,
+                        const vec3& higher_orders, CounterRng& rng, BakeCounters& counters,
                         IrradianceParts& parts) const;
     // trace_texel's lines for an occluded connection.
     template <class Line>
@@ -169,7 +223,7 @@ class BakeEstimator {
     void add_scattered(EmitterKind kind, const vec3& intensity, const vec3& dir, double distance,
                        double shift, const vec3& emitter_normal, const SegmentOptics& optics,
                        const vec3& n, float albedo_lum, IrradianceParts& out,
-                       BakeCounters& counters) const;
+                       BakeCounters& counters, int last_bounce_cap = 0) const;
     // An area emitter's single-scattered lobe axis: l tilted by `tilt` towards the part of the
     // emitter's normal across l (area_tables.h).
     static glm::dvec3 tilted_axis(const glm::dvec3& l, const vec3& emitter_normal, double tilt);

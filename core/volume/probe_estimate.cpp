@@ -141,13 +141,17 @@ void BakeEstimator::trace_occluded(const EmitterSample& s, const vec3& p, const 
     BakeCounters counters;
     const IrradianceParts unoccluded =
         unoccluded_scatter(s, p, n, luminance(albedo), rng, counters);
+    const vec3 higher = settings_.media_bounces > 2
+                            ? unoccluded_higher_orders(s, p, n, luminance(albedo), rng, counters)
+                            : vec3(0.0f);
     constexpr int kDraws = 1024;
-    double sum = 0.0, sum2 = 0.0;
+    double sum = 0.0, sum2 = 0.0, second = 0.0;
     int in_medium = 0, lit = 0;
     for (int i = 0; i < kDraws; ++i) {
         const LitMediumSample one = lit_medium_single(s, p, n, rng, counters);
         const double v = luminance(one.single);
         sum += v, sum2 += v * v;
+        second += luminance(one.multiple);
         in_medium += one.in_medium, lit += one.lit;
     }
     const double mean = sum / kDraws;
@@ -155,14 +159,14 @@ void BakeEstimator::trace_occluded(const EmitterSample& s, const vec3& p, const 
     const double table_single = luminance(unoccluded.single);
     line("  occluded: the lit medium around the receiver (%d draws: %d in the medium, %d lit)",
          kDraws, in_medium, lit);
-    line("    unoccluded tables: single %.5g, multiple %.5g", table_single,
-         double(luminance(unoccluded.multiple)));
+    line("    unoccluded tables: single %.5g, multiple %.5g (orders 3+ %.5g)", table_single,
+         double(luminance(unoccluded.multiple)), double(luminance(higher)));
     line("    lit-medium single %.5g +- %.2g -> visibility of the lit medium %.3f", mean, se,
          table_single > 0.0 ? mean / table_single : 0.0);
     line(
-        "    contributions: single %.5g, multiple %.5g (the unoccluded multiple x the lit "
-        "fraction %.3f)",
-        mean, double(luminance(unoccluded.multiple)) * lit / kDraws, double(lit) / kDraws);
+        "    contributions: single %.5g, multiple %.5g (order 2 through the lit medium %.5g + "
+        "the tables' orders 3+)",
+        mean, second / kDraws + double(luminance(higher)), second / kDraws);
 }
 
 std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n,
@@ -229,7 +233,21 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
         line("  scattered irradiance: single %.5g, multiple %.5g", double(luminance(e.single)),
              double(luminance(e.multiple)));
     }
-    (void)albedo;
+    if (scatters_ && settings_.hidden_surface_light && settings_.lit_medium_depth >= 0 &&
+        settings_.bounces > 0) {
+        // The bake's own estimate, averaged over draws of its own.
+        constexpr int kDraws = 1024;
+        vec3 single(0.0f), multiple(0.0f);
+        for (int i = 0; i < kDraws; ++i) {
+            const ScatteredSurfaceLight one = surface_light_scattered(p, n, rng, counters);
+            single += one.single / float(kDraws);
+            multiple += one.multiple / float(kDraws);
+        }
+        line(
+            "hidden surfaces' light scattered in front of the texel (%d draws): single %.5g, "
+            "multiple %.5g",
+            kDraws, double(luminance(single)), double(luminance(multiple)));
+    }
     return lines;
 }
 
