@@ -32,8 +32,15 @@ const SettingsSchema& BakeSettings::schema() {
                    "Impulse: the texel also gets the light of surfaces it cannot see (a coplanar "
                    "floor, what an occluder hides), scattered in the medium in front of it: one "
                    "medium point, a phase-sampled ray to a surface and that surface's direct "
-                   "light with its tables (single exactly; orders 2+ by the in-medium area "
+                   "light with its tables (single exactly; order 2 by the in-medium area "
                    "response there). Needs bake.bounces >= 1 and lit_medium_depth >= 0.")
+            .field(&BakeSettings::single_correction, "single_correction", 0, 1, "",
+                   kInvalidatesBake,
+                   "Impulse: a distant emitter's (sun, sky) unoccluded single scattering at the "
+                   "texel is the tables' half-space value plus, at one medium point, the real "
+                   "media's and geometry's integrand minus the model's (a control variate: "
+                   "media edges, heterogeneity and shadows the tables cannot see; 2 rays). Needs "
+                   "lit_medium_depth >= 0.")
             .field(&BakeSettings::texel_density, "texel_density", 0.01, 4096, "texels/unit",
                    kInvalidatesBake, "Lightmap resolution: texels per scene unit.")
             .field(&BakeSettings::max_size, "max_size", 16, 8192, "texels", kInvalidatesBake,

@@ -24,6 +24,9 @@ struct BakeSettings {
     // Impulse, at the texel: light of surfaces it cannot see (a coplanar floor, what lies
     // behind an occluder) scattered in the medium in front of it (issue "Method B, part 3").
     bool hidden_surface_light = true;
+    // Impulse, at the texel: distant emitters' unoccluded single scattering corrected by the
+    // real media and geometry (a control variate on the tables' half-space model).
+    bool single_correction = true;
     float texel_density = 16.0f;  // texels per scene unit
     int max_size = 1024;          // atlas side limit
     int padding = 2;              // gutter texels per chart

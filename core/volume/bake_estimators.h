@@ -107,6 +107,17 @@ class BakeEstimator {
         bool fixed = false;         // a point or directional light: the same for every path
         int light = -1;             // index in the scene's lights
     };
+    // A point x = o + t w of the media in front of the receiver: w cosine-sampled about n, t by
+    // a free flight at the ray's mean extinction or, given an emitter point, equiangular about
+    // it; pdf is t's. check_path: geometry may lie between o and x.
+    struct MediumPoint {
+        bool valid = false;
+        vec3 o{0.0f}, w{0.0f}, x{0.0f};
+        double t = 0.0, pdf = 0.0;
+        bool check_path = true;
+        double t_end = 0.0;  // the drawn part of the ray: to the media's exit or first surface
+        HomogeneousMedium here{0.0, 0.0, 0.0};
+    };
     // Light of one emitter sample scattered into (p, n) by the lit medium around p, for a
     // connection the tables cannot take (occluded, or below the horizon): one point x_t drawn
     // along a cosine-sampled direction w (free-flight distance for distant emitters,
@@ -138,6 +149,11 @@ class BakeEstimator {
         bool lit = false;  // x2 exists and sees the emitter
         vec3 radiance{0.0f};
     };
+    // Order 2 through the medium point m (seen by the receiver) into r.multiple; to_receiver:
+    // T(p, m.x) when known.
+    void add_second_scatter(const EmitterSample& s, const vec3& emitter, const MediumPoint& m,
+                            CounterRng& rng, BakeCounters& counters, LitMediumSample& r,
+                            double to_receiver = -1.0) const;
     SecondScatter second_scatter(const EmitterSample& s, const vec3& emitter, const vec3& x,
                                  const vec3& w, const HomogeneousMedium& here, CounterRng& rng,
                                  BakeCounters& counters) const;
@@ -145,31 +161,29 @@ class BakeEstimator {
         bool occluded = false;
         vec3 multiple{0.0f};  // the unoccluded response's orders 3 and up
     };
-    // A point x = o + t w of the media in front of the receiver: w cosine-sampled about n, t by
-    // a free flight at the ray's mean extinction or, given an emitter point, equiangular about
-    // it; pdf is t's. check_path: geometry may lie between o and x.
-    struct MediumPoint {
-        bool valid = false;
-        vec3 o{0.0f}, w{0.0f}, x{0.0f};
-        double t = 0.0, pdf = 0.0;
-        bool check_path = true;
-        HomogeneousMedium here{0.0, 0.0, 0.0};
-    };
+    // A distant emitter's unoccluded connection: the lit medium's single scattering through
+    // the real media and geometry minus the tables' model of it (a control variate: the
+    // tables' value plus this is unbiased for single scattering, up to the tables' ZH error).
+    vec3 single_correction(const EmitterSample& s, const vec3& p, const vec3& n, CounterRng& rng,
+                           BakeCounters& counters) const;
+    // The same for a point or area emitter sample (the tables' infinite-medium model).
+    vec3 local_single_correction(const EmitterSample& s, const vec3& p, const vec3& n,
+                                 CounterRng& rng, BakeCounters& counters) const;
     MediumPoint draw_medium_point(const vec3& p, const vec3& n, const vec3* emitter,
                                   CounterRng& rng, BakeCounters& counters) const;
     bool sees_receiver(const MediumPoint& m, BakeCounters& counters) const;
     // Light reflected by surfaces the receiver cannot see, scattered once in the medium in
     // front of it towards it: x by draw_medium_point, HG sampling at x to a surface y, y's
     // radiance from its own direct light and the media's response (the last vertex of a
-    // surface path). Irradiance, unbiased for that order of y's radiance.
+    // surface path); order 2 of y's light through the in-medium area response at x.
     struct ScatteredSurfaceLight {
         vec3 single{0.0f}, multiple{0.0f};
     };
     ScatteredSurfaceLight surface_light_scattered(const vec3& p, const vec3& n, CounterRng& rng,
                                                   BakeCounters& counters) const;
-    // sigma_s-less radiance scattered at a medium point towards -w of the in-medium response
-    // there to a differential-area emitter seen along l at `distance` (orders >= 1 of its
-    // light before the point): the phase (anisotropy g_here) convolved with the response.
+    // sigma_s-less radiance scattered at a medium point towards -w of the in-medium single
+    // response there to a differential-area emitter seen along l at `distance`: the phase
+    // (anisotropy g_here) convolved with the response (Funk-Hecke).
     vec3 area_response_rescattered(const vec3& intensity, const vec3& l, double distance,
                                    const vec3& emitter_normal, const SegmentOptics& optics,
                                    double g_here, const vec3& w, BakeCounters& counters) const;
