@@ -60,11 +60,13 @@ Mean scattered_mean(const BakeEstimator& e, vec3 p, int paths, uint64_t key, boo
 // order 1: single scattering; order 2: media_bounces = 2, whose multiple part is order 2 alone
 // (the lit medium's second_scatter in impulse): both are what the estimate is unbiased for.
 void expect_impulse_equals_vpt_in_umbra(const std::string& light, const std::vector<vec3>& points,
-                                        int order = 1, bool umbra = true) {
+                                        int order = 1, bool umbra = true,
+                                        TexelMultiple mode = TexelMultiple::Tables) {
     Fixture f(occluder_in_haze(light));
     BakeSettings s;
     s.bounces = 0;  // direct light at the receiver only: no surface vertex
     s.media_bounces = order;
+    s.texel_multiple = mode;
     const ImpulseTables& tables = test_support::shared_impulse_tables();
     const BakeEstimator impulse(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
     const BakeEstimator vpt(*f.rays, f.media, nullptr, BakeMethod::Vpt, s);
@@ -78,10 +80,9 @@ void expect_impulse_equals_vpt_in_umbra(const std::string& light, const std::vec
     for (size_t i = 0; i < points.size(); ++i) {
         const double t =
             (a[i].mean - b[i].mean) / std::sqrt(a[i].variance_of_mean + b[i].variance_of_mean);
-        std::printf(
-            "umbra (%.2f, %.2f): order %d: impulse %.5f +- %.5f, vpt %.5f +- %.5f, t %.2f\n",
-            points[i].x, points[i].y, order, a[i].mean, std::sqrt(a[i].variance_of_mean), b[i].mean,
-            std::sqrt(b[i].variance_of_mean), t);
+        std::printf("at (%.2f, %.2f): order %d: impulse %.5f +- %.5f, vpt %.5f +- %.5f, t %.2f\n",
+                    points[i].x, points[i].y, order, a[i].mean, std::sqrt(a[i].variance_of_mean),
+                    b[i].mean, std::sqrt(b[i].variance_of_mean), t);
         EXPECT_GT(b[i].mean, 0.0);
         EXPECT_LT(std::abs(t), 4.0) << i;
         // Precise enough to mean something: 2 % standard error or better.
@@ -109,6 +110,10 @@ TEST(LitMedium, DirectionalLightScatteredTwiceIntoAnUmbraEqualsVpt) {
     expect_impulse_equals_vpt_in_umbra(
         R"({"type": "directional", "direction": [-0.25, 0.15, -1], "irradiance": 3.0})",
         {vec3(-0.3f, 0.2f, 0.0f), vec3(-0.7f, -0.2f, 0.0f)}, 2);
+    // The default: order 2 from the texel's walk through the real media.
+    expect_impulse_equals_vpt_in_umbra(
+        R"({"type": "directional", "direction": [-0.25, 0.15, -1], "irradiance": 3.0})",
+        {vec3(-0.3f, 0.2f, 0.0f)}, 2, true, TexelMultiple::Walk);
 }
 
 TEST(LitMedium, PointLightScatteredTwiceIntoAnUmbraEqualsVpt) {

@@ -58,6 +58,15 @@ const SettingsSchema& BakeSettings::schema() {
                    "Impulse: tabulate the ZH x clamped-cosine double product once per medium over "
                    "distance, as its polynomial in the cosine (one lookup per segment); off "
                    "queries the tables and integrates per segment.")
+            .choice(&BakeSettings::texel_multiple, "texel_multiple", {"walk", "tables"},
+                    kInvalidatesBake,
+                    "Impulse: where the texel's light scattered twice or more by the media comes "
+                    "from. walk: a random walk through the real media from the texel, ending at "
+                    "the first surface (NEE from the second scattering event on; the tables "
+                    "count medium beyond walls and floors: cornell_fog's floor 2.4x VPT's); "
+                    "tables: the tables' multiple response (the seed's), with order 2 of "
+                    "occluded connections through the lit medium. Deeper path vertices and "
+                    "surface light use the tables either way.")
             .choice(&BakeSettings::tracking, "tracking", {"exact", "ratio"}, kInvalidatesBake,
                     "How extinction and impulse segments cross density grids: exact visits every "
                     "voxel (3D DDA; O(1) for grids that vary along one axis); ratio tracks "

@@ -12,6 +12,8 @@ namespace freqlab {
 enum class BackScatter { Off, Albedo, On };
 // How a bake path's segments cross density grids (core/volume/media.h).
 enum class Tracking { Exact, Ratio };
+// Where impulse's multiple scattering at a texel comes from (issue "Method B, part 3").
+enum class TexelMultiple { Walk, Tables };
 
 struct BakeSettings {
     int spp = 64;            // paths per texel
@@ -27,6 +29,7 @@ struct BakeSettings {
     // Impulse, at the texel: distant emitters' unoccluded single scattering corrected by the
     // real media and geometry (a control variate on the tables' half-space model).
     bool single_correction = true;
+    TexelMultiple texel_multiple = TexelMultiple::Walk;
     float texel_density = 16.0f;  // texels per scene unit
     int max_size = 1024;          // atlas side limit
     int padding = 2;              // gutter texels per chart

@@ -85,6 +85,11 @@ BakeEstimator::BakeEstimator(const RayScene& scene, const Media& media, const Im
     zh_clamped_cosine(kImpulseOrder, cosine_zh_);
 }
 
+bool BakeEstimator::texel_walk() const {
+    return scatters_ && settings_.texel_multiple == TexelMultiple::Walk &&
+           settings_.media_bounces > 1;
+}
+
 vec3 BakeEstimator::origin(const vec3& p, const vec3& n) const {
     return spawn_point(p, n);
 }
@@ -280,13 +285,14 @@ IrradianceParts BakeEstimator::estimate(const vec3& p, const vec3& n, const vec3
 
 bool BakeEstimator::direct_light(const EmitterSample& s, const vec3& p, const vec3& n,
                                  float albedo_lum, CounterRng& rng, BakeCounters& counters,
-                                 IrradianceParts& parts, vec3* occluded_multiple) const {
+                                 IrradianceParts& parts, vec3* occluded_multiple,
+                                 bool no_multiple) const {
     const float cos_x = glm::dot(n, s.dir);
     // Below the horizon the segment to the emitter enters the receiver's own surface at once:
     // no ray is cast, and like an occluded one the connection brings no direct light; the
     // light scattered by the lit medium around the receiver is lit_medium_single's.
     if (cos_x <= 0.0f || !visible(p, n, s.dir, s.distance, counters)) {
-        if (scatters_ && occluded_multiple && settings_.media_bounces > 2)
+        if (scatters_ && occluded_multiple && !no_multiple && settings_.media_bounces > 2)
             *occluded_multiple = unoccluded_higher_orders(s, p, n, albedo_lum, rng, counters);
         return false;
     }
@@ -299,8 +305,11 @@ bool BakeEstimator::direct_light(const EmitterSample& s, const vec3& p, const ve
     parts.surface += s.irradiance * cos_x * optics.transmittance_float();
     if (scatters_) {
         const double distance = std::isfinite(s.distance) ? s.distance : optics.length;
+        IrradianceParts scattered;
         add_scattered(s.kind, s.intensity, s.dir, distance, s.shift, s.emitter_normal, optics, n,
-                      albedo_lum, parts, counters);
+                      albedo_lum, scattered, counters);
+        parts.single += scattered.single;
+        if (!no_multiple) parts.multiple += scattered.multiple;
     }
     return true;
 }
@@ -333,7 +342,8 @@ vec3 BakeEstimator::unoccluded_higher_orders(const EmitterSample& s, const vec3&
 
 void BakeEstimator::add_lit_medium(const EmitterSample& s, const vec3& p, const vec3& n,
                                    const vec3& higher_orders, CounterRng& rng,
-                                   BakeCounters& counters, IrradianceParts& parts) const {
+                                   BakeCounters& counters, IrradianceParts& parts,
+                                   bool no_multiple) const {
     // Environment samples below the horizon are half of a uniform sky's and bring little on
     // open ground (the medium they light lies beyond the ground's edge): Russian roulette,
     // one in kBelowHorizonKeep kept and weighted up, so that they cost a quarter.
@@ -349,6 +359,7 @@ void BakeEstimator::add_lit_medium(const EmitterSample& s, const vec3& p, const 
     // a closed gap, e.g. a box's face on the floor). They come from so far around that the
     // shadow itself barely changes them (haze_occluder's umbra, VPT: orders 3+ 0.092 there,
     // 0.079 on the open floor; weighting them by "the point drawn is lit" read 0.065).
+    if (no_multiple) return;
     parts.multiple += lit.multiple * weight;
     if (lit.seen) parts.multiple += higher_orders * weight;
 }
@@ -419,7 +430,7 @@ BakeEstimator::LitMediumSample BakeEstimator::lit_medium_single(const EmitterSam
     const bool distant = !std::isfinite(s.distance);
     const vec3 emitter = distant ? vec3(0.0f) : p + s.dir * float(s.distance);
     const MediumPoint m = draw_medium_point(p, n, distant ? nullptr : &emitter, rng, counters);
-    const bool order_two = settings_.media_bounces > 1;
+    const bool order_two = settings_.media_bounces > 1 && !texel_walk();
     if (order_two && !distant) {
         // Order 2 from a point of its own, by free flight: an equiangular point far from the
         // emitter weighs 1 / h (h the ray's distance to the emitter), which order 2 has no
@@ -745,15 +756,18 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     // it through a diffuse bounce, and cost as much).
     const bool lit_here = scatters_ && depth <= settings_.lit_medium_depth;
     occluded.assign(lit_here ? local.size() : 0, OccludedConnection{});
+    const bool walk_here = lit_here && texel_walk();
     for (size_t i = 0; i < local.size(); ++i) {
         const EmitterSample& s = local[i];
         vec3 multiple(0.0f);
         vec3* want = lit_here ? &multiple : nullptr;
         if (!fixed || !s.fixed) {
-            if (!direct_light(s, p, n, albedo_lum, rng, counters, parts, want) && lit_here)
+            if (!direct_light(s, p, n, albedo_lum, rng, counters, parts, want, walk_here) &&
+                lit_here)
                 occluded[i] = {true, multiple};
         } else if (learn) {
-            if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, want) && lit_here)
+            if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, want, walk_here) &&
+                lit_here)
                 fixed->occluded.emplace_back(s.light, multiple);
         }
     }
@@ -769,7 +783,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     }
     for (size_t i = 0; i < occluded.size(); ++i) {
         if (occluded[i].occluded)
-            add_lit_medium(local[i], p, n, occluded[i].multiple, rng, counters, parts);
+            add_lit_medium(local[i], p, n, occluded[i].multiple, rng, counters, parts, walk_here);
         else if (settings_.single_correction && glm::dot(n, local[i].dir) > 0.0f)
             parts.single += std::isfinite(local[i].distance)
                                 ? local_single_correction(local[i], p, n, rng, counters)
@@ -780,6 +794,14 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
         const ScatteredSurfaceLight hidden = surface_light_scattered(p, n, rng, counters);
         parts.single += hidden.single;
         parts.multiple += hidden.multiple;
+    }
+    if (walk_here) {
+        // Orders 2+ through the real media (texel_multiple = walk): VPT's walk from the
+        // receiver, NEE from its second scattering event on, ending at the first surface.
+        const vec3 ld = sample_cosine_hemisphere(rng.next_float(), rng.next_float());
+        if (ld.z > 1e-6f)
+            parts.multiple +=
+                walk(origin(p, n), Frame(n).to_world(ld), vec3(kPi), rng, counters, true).multiple;
     }
     if (depth >= settings_.bounces) return parts;
     // One indirect segment, cosine-sampled: irradiance = pi x radiance on average.
@@ -872,7 +894,7 @@ IrradianceParts BakeEstimator::volume_path(const vec3& p, const vec3& n, Counter
 }
 
 IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, CounterRng& rng,
-                                    BakeCounters& counters) const {
+                                    BakeCounters& counters, bool media_multiple_only) const {
     IrradianceParts parts;
     std::vector<EmitterSample> emitters;
     int chain = 0;      // scattering events since the last surface vertex
@@ -885,7 +907,8 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
         ++counters.rays;
         const SurfaceHit hit = scene_.intersect(Ray{pos, dir, 0.0f, INFINITY});
         const double t_max = hit.valid ? double(hit.distance) : kInfinity;
-        if (!media_.empty() && chain < settings_.media_bounces)
+        if (!media_.empty() && chain < settings_.media_bounces &&
+            !(media_multiple_only && chain == 0))
             add(category >= 0 ? category : (chain == 0 ? 1 : 2),
                 throughput * point_lights_along(pos, dir, t_max, rng, counters));
         const MediumCollision c =
@@ -898,6 +921,7 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
             throughput *= float(c.sigma_s / c.sigma_t);
             const int cat = category >= 0 ? category : (chain == 1 ? 1 : 2);
             sample_emitters(x, rng, emitters);
+            if (media_multiple_only && chain == 1) emitters.clear();  // single: not asked
             for (const EmitterSample& s : emitters) {
                 if (s.kind == EmitterKind::Point) continue;  // point_lights_along() has them
                 // Light travels along -s.dir, then along -dir after scattering at x.
@@ -919,7 +943,7 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
             }
             continue;
         }
-        if (!hit.valid) break;
+        if (!hit.valid || media_multiple_only) break;
         if (category < 0) category = chain == 0 ? 0 : (chain == 1 ? 1 : 2);
         if (++surface_vertices > settings_.bounces) break;
         const Material& material = scene_.scene().materials[size_t(hit.material)];

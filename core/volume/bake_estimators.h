@@ -211,12 +211,12 @@ class BakeEstimator {
     // *occluded_multiple (when given) is the unoccluded response's orders 3 and up.
     bool direct_light(const EmitterSample& s, const vec3& p, const vec3& n, float albedo_lum,
                       CounterRng& rng, BakeCounters& counters, IrradianceParts& parts,
-                      vec3* occluded_multiple = nullptr) const;
+                      vec3* occluded_multiple = nullptr, bool no_multiple = false) const;
     // The lit-medium estimate of an occluded connection, added to parts: its single
     // scattering and order 2 (lit_medium_single), and the unoccluded orders 3 and up.
     void add_lit_medium(const EmitterSample& s, const vec3& p, const vec3& n,
                         const vec3& higher_orders, CounterRng& rng, BakeCounters& counters,
-                        IrradianceParts& parts) const;
+                        IrradianceParts& parts, bool no_multiple = false) const;
     // trace_texel's lines for an occluded connection.
     template <class Line>
     void trace_occluded(const EmitterSample& s, const vec3& p, const vec3& n, const vec3& albedo,
@@ -225,8 +225,10 @@ class BakeEstimator {
                                 BakeCounters& counters) const;
     // VPT's random walk from pos along dir: free flights, scattering in media (NEE, HG),
     // diffuse bounces on surfaces; what arrives back at pos, times `throughput`.
+    // media_multiple_only: only the light scattered twice or more between pos and the first
+    // surface (the walk ends there; no single scattering is gathered).
     IrradianceParts walk(vec3 pos, vec3 dir, vec3 throughput, CounterRng& rng,
-                         BakeCounters& counters) const;
+                         BakeCounters& counters, bool media_multiple_only = false) const;
     // Light of the scene's point lights scattered once anywhere on the segment o + t d,
     // t < t_max, towards o: equiangular sampling, since collision-point NEE to a point light
     // has infinite variance in a medium (1/r^2 near the light).
@@ -249,6 +251,8 @@ class BakeEstimator {
     bool visible(const vec3& from, const vec3& n, const vec3& dir, double distance,
                  BakeCounters& counters) const;
     vec3 origin(const vec3& p, const vec3& n) const;
+    // Impulse's texel vertices take their multiple scattering from a walk (BakeSettings).
+    bool texel_walk() const;
 
     const RayScene& scene_;
     const Media& media_;

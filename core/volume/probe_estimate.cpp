@@ -141,7 +141,7 @@ void BakeEstimator::trace_occluded(const EmitterSample& s, const vec3& p, const 
     BakeCounters counters;
     const IrradianceParts unoccluded =
         unoccluded_scatter(s, p, n, luminance(albedo), rng, counters);
-    const vec3 higher = settings_.media_bounces > 2
+    const vec3 higher = settings_.media_bounces > 2 && !texel_walk()
                             ? unoccluded_higher_orders(s, p, n, luminance(albedo), rng, counters)
                             : vec3(0.0f);
     constexpr int kDraws = 1024;
@@ -163,6 +163,10 @@ void BakeEstimator::trace_occluded(const EmitterSample& s, const vec3& p, const 
          double(luminance(unoccluded.multiple)), double(luminance(higher)));
     line("    lit-medium single %.5g +- %.2g -> visibility of the lit medium %.3f", mean, se,
          table_single > 0.0 ? mean / table_single : 0.0);
+    if (texel_walk()) {
+        line("    contributions: single %.5g; multiple from the texel's walk (below)", mean);
+        return;
+    }
     line(
         "    contributions: single %.5g, multiple %.5g (order 2 through the lit medium %.5g + "
         "the tables' orders 3+)",
@@ -247,6 +251,21 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
             "hidden surfaces' light scattered in front of the texel (%d draws): single %.5g, "
             "multiple %.5g",
             kDraws, double(luminance(single)), double(luminance(multiple)));
+    }
+    if (texel_walk() && settings_.lit_medium_depth >= 0) {
+        // The bake's own walk, averaged over draws of its own.
+        constexpr int kDraws = 4096;
+        double sum = 0.0, sum2 = 0.0;
+        for (int i = 0; i < kDraws; ++i) {
+            const vec3 ld = sample_cosine_hemisphere(rng.next_float(), rng.next_float());
+            if (ld.z <= 1e-6f) continue;
+            const double v = luminance(
+                walk(origin(p, n), Frame(n).to_world(ld), vec3(kPi), rng, counters, true).multiple);
+            sum += v, sum2 += v * v;
+        }
+        const double mean = sum / kDraws;
+        line("multiple scattering of every emitter by the texel's walk (%d draws): %.5g +- %.2g",
+             kDraws, mean, std::sqrt(std::max(0.0, sum2 / kDraws - mean * mean) / kDraws));
     }
     return lines;
 }
