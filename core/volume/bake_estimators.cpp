@@ -118,7 +118,21 @@ void BakeEstimator::sample_emitters(const vec3& p, CounterRng& rng,
                     u.y = rng.next_float();
                 }
                 const LightSample ls = sample_light(light, p, u);
-                if (!ls.valid) continue;
+                if (!ls.valid) {
+                    // p behind a quad: no direct light, but the medium in front of the quad
+                    // it sees is lit (smoke_room's ceiling: single 0.31x VPT's without it).
+                    if (!scatters_ || light.type != LightType::Quad || !(ls.distance > 0.0f))
+                        continue;
+                    s.kind = EmitterKind::Area;
+                    s.dir = ls.direction;
+                    s.distance = ls.distance;
+                    s.emitter_normal = ls.emitter_normal;
+                    s.intensity =
+                        light.intensity * glm::length(glm::cross(light.edge_u, light.edge_v));
+                    s.behind = true;
+                    out.push_back(s);
+                    continue;
+                }
                 s.kind = light.type == LightType::Point         ? EmitterKind::Point
                          : light.type == LightType::Directional ? EmitterKind::Directional
                                                                 : EmitterKind::Area;
@@ -291,8 +305,10 @@ bool BakeEstimator::direct_light(const EmitterSample& s, const vec3& p, const ve
     // Below the horizon the segment to the emitter enters the receiver's own surface at once:
     // no ray is cast, and like an occluded one the connection brings no direct light; the
     // light scattered by the lit medium around the receiver is lit_medium_single's.
-    if (cos_x <= 0.0f || !visible(p, n, s.dir, s.distance, counters)) {
-        if (scatters_ && occluded_multiple && !no_multiple && settings_.media_bounces > 2)
+    if (s.behind || cos_x <= 0.0f || !visible(p, n, s.dir, s.distance, counters)) {
+        // Behind an area light the tables have no response (they are of its front).
+        if (scatters_ && occluded_multiple && !no_multiple && !s.behind &&
+            settings_.media_bounces > 2)
             *occluded_multiple = unoccluded_higher_orders(s, p, n, albedo_lum, rng, counters);
         return false;
     }
@@ -623,13 +639,15 @@ vec3 BakeEstimator::single_correction(const EmitterSample& s, const vec3& p, con
     // The tables' model: a half-space of the segment's effective medium whose boundary, normal
     // to l, lies D along l; along w its single-scattering integrand is
     // sigma_s f(l.w) E0 e^-st D e^-k t, k = st (1 - w.l), for t < D / (w.l) (w.l > 0).
+    // Where the tables brought nothing (add_scattered: no medium on the segment, or past their
+    // last distance) the model is empty and the correction is the real single scattering.
     const double depth = media_.exit_distance(p, s.dir);
-    if (!(depth > 0.0) || !std::isfinite(depth)) return vec3(0.0f);
-    const SegmentOptics optics = segment_optics(p, s.dir, depth, rng);
-    if (!(optics.tau_s > 0.0)) return vec3(0.0f);
-    const HomogeneousMedium model = optics.effective();
-    // Where the tables bring nothing (add_scattered), there is nothing to correct.
-    if (model.sigma_t() * depth > ZhDistanceTable::kMaxD) return vec3(0.0f);
+    if (!std::isfinite(depth)) return vec3(0.0f);  // a medium filling space: the sun is dark
+    const SegmentOptics optics =
+        depth > 0.0 ? segment_optics(p, s.dir, depth, rng) : SegmentOptics{};
+    HomogeneousMedium model =
+        optics.tau_s > 0.0 ? optics.effective() : HomogeneousMedium{0.0, 0.0, 0.0};
+    if (model.sigma_t() * depth > ZhDistanceTable::kMaxD) model = HomogeneousMedium{0.0, 0.0, 0.0};
     const double g_model = std::clamp(model.g, -kGRange, kGRange);
     const MediumPoint m = draw_medium_point(p, n, nullptr, rng, counters);
     if (glm::length(m.w) == 0.0f) return vec3(0.0f);  // a grazing direction: measure zero
@@ -641,7 +659,7 @@ vec3 BakeEstimator::single_correction(const EmitterSample& s, const vec3& p, con
     // The model's integral over [a, b] along w, in closed form.
     auto model_integral = [&](double a, double b) {
         b = std::min(b, t_boundary);
-        if (!(a < b)) return 0.0;
+        if (!(a < b) || base == 0.0) return 0.0;
         const double ea = std::exp(-k * a);
         return base * (k > 1e-12 ? (ea - (std::isfinite(b) ? std::exp(-k * b) : 0.0)) / k : b - a);
     };
@@ -676,11 +694,13 @@ vec3 BakeEstimator::local_single_correction(const EmitterSample& s, const vec3& 
     // or the first surface.
     const float u1 = rng.next_float(), u2 = rng.next_float();
     const double u3 = rng.next_double();
+    // An empty model where the tables brought nothing (as single_correction).
     const SegmentOptics optics = segment_optics(p, s.dir, s.distance, rng);
-    if (!(optics.tau_s > 0.0)) return vec3(0.0f);
-    const HomogeneousMedium model = optics.effective();
+    HomogeneousMedium model =
+        optics.tau_s > 0.0 ? optics.effective() : HomogeneousMedium{0.0, 0.0, 0.0};
+    if (model.sigma_t() * s.distance > ZhDistanceTable::kMaxD)
+        model = HomogeneousMedium{0.0, 0.0, 0.0};
     const double st = model.sigma_t();
-    if (st * s.distance > ZhDistanceTable::kMaxD) return vec3(0.0f);
     const double g_model = std::clamp(model.g, -kGRange, kGRange);
     const vec3 local_dir = sample_cosine_hemisphere(u1, u2);
     if (local_dir.z <= 1e-6f) return vec3(0.0f);
@@ -835,6 +855,16 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
         add_scattered(EmitterKind::Area, intensity, dir, d,
                       std::sqrt(std::max(0.0f, 1.0f - cos_y * cos_y)), hit.shading_normal, optics,
                       n, albedo_lum, parts, counters);
+        if (lit_here && settings_.single_correction) {
+            // y's light scattered once on the way is the area tables' infinite medium too.
+            EmitterSample y;
+            y.kind = EmitterKind::Area;
+            y.dir = dir;
+            y.distance = d;
+            y.intensity = intensity;
+            y.emitter_normal = hit.shading_normal;
+            parts.single += local_single_correction(y, p, n, rng, counters);
+        }
     }
     return parts;
 }
@@ -880,7 +910,7 @@ IrradianceParts BakeEstimator::volume_path(const vec3& p, const vec3& n, Counter
     sample_emitters(p, rng, emitters);
     for (const EmitterSample& s : emitters) {
         const float cos_x = glm::dot(n, s.dir);
-        if (cos_x <= 0.0f || !visible(p, n, s.dir, s.distance, counters)) continue;
+        if (s.behind || cos_x <= 0.0f || !visible(p, n, s.dir, s.distance, counters)) continue;
         const double length =
             std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
         parts.surface += s.irradiance * cos_x * float(media_.transmittance(p, s.dir, length));
@@ -923,7 +953,8 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
             sample_emitters(x, rng, emitters);
             if (media_multiple_only && chain == 1) emitters.clear();  // single: not asked
             for (const EmitterSample& s : emitters) {
-                if (s.kind == EmitterKind::Point) continue;  // point_lights_along() has them
+                // point_lights_along() has point lights; behind a quad nothing arrives.
+                if (s.kind == EmitterKind::Point || s.behind) continue;
                 // Light travels along -s.dir, then along -dir after scattering at x.
                 const float phase = float(hg_phase(c.g, glm::dot(s.dir, dir)));
                 ++counters.rays;
@@ -955,7 +986,9 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
         sample_emitters(hit.position, rng, emitters);
         for (const EmitterSample& s : emitters) {
             const float cos_y = glm::dot(ny, s.dir);
-            if (cos_y <= 0.0f || !visible(hit.position, ny, s.dir, s.distance, counters)) continue;
+            if (s.behind || cos_y <= 0.0f ||
+                !visible(hit.position, ny, s.dir, s.distance, counters))
+                continue;
             const double length =
                 std::isfinite(s.distance) ? s.distance : media_.exit_distance(hit.position, s.dir);
             add(category, throughput * albedo_y * kInvPi * s.irradiance * cos_y *

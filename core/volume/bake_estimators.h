@@ -105,6 +105,7 @@ class BakeEstimator {
         vec3 emitter_normal{0.0f};  // area emitters
         double shift = 0.0;         // area emitters: sin(angle of the emitter normal to -dir)
         bool fixed = false;         // a point or directional light: the same for every path
+        bool behind = false;        // impulse: p behind the quad light (lit medium only)
         int light = -1;             // index in the scene's lights
     };
     // A point x = o + t w of the media in front of the receiver: w cosine-sampled about n, t by

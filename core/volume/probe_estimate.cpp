@@ -87,7 +87,7 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
     std::vector<EmitterSample> emitters;
     sample_emitters(p, rng, emitters);
     for (const EmitterSample& s : emitters) {
-        if (!visible(p, no_offset, s.dir, s.distance, counters)) continue;
+        if (s.behind || !visible(p, no_offset, s.dir, s.distance, counters)) continue;
         SegmentOptics optics;
         if (attenuates_) {
             const double length =
@@ -191,7 +191,7 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
         const EmitterSample& s = emitters[i];
         const float cos_x = glm::dot(n, s.dir);
         // As the estimator: below the horizon the receiver's own surface occludes the segment.
-        const bool vis = cos_x > 0.0f && visible(p, n, s.dir, s.distance, counters);
+        const bool vis = !s.behind && cos_x > 0.0f && visible(p, n, s.dir, s.distance, counters);
         const double length =
             std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
         const SegmentOptics o = media_.integrate(p, s.dir, length);
@@ -199,6 +199,7 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
         line("emitter %zu (%s): dir (%.2f, %.2f, %.2f), cos %.3f, %s", i, kinds[int(s.kind)],
              s.dir.x, s.dir.y, s.dir.z, cos_x,
              vis            ? "visible"
+             : s.behind     ? "behind the light (its lit medium only)"
              : cos_x > 0.0f ? "occluded"
                             : "below the horizon");
         line(
