@@ -481,7 +481,6 @@ void BakeEstimator::add_second_scatter(const EmitterSample& s, const vec3& emitt
                                        double to_receiver) const {
     const SecondScatter second = second_scatter(s, emitter, m.x, m.w, m.here, rng, counters);
     if (to_receiver < 0.0) to_receiver = media_.transmittance(m.o, m.w, m.t);
-    r.second_lit = second.lit;
     r.multiple = second.radiance * float(kPiD * to_receiver * m.here.sigma_s / m.pdf);
 }
 
@@ -545,7 +544,6 @@ BakeEstimator::SecondScatter BakeEstimator::second_scatter(
     if (!at.valid) return r;
     ++counters.rays;
     if (scene_.occluded(shadow_ray(x2, at.l, at.distance))) return r;
-    r.lit = true;
     r.radiance = at.strength * float(along * hg_phase(there.g, glm::dot(at.l, w2)) *
                                      media_.transmittance(x2, at.l, at.to_emitter));
     return r;

@@ -127,12 +127,11 @@ class BakeEstimator {
     // pi T(p, x_t) sigma_s(x_t) f_HG E(x_t) T(x_t, emitter) V / pdf(t), unbiased for single
     // scattering through the real (heterogeneous, bounded) media and geometry.
     struct LitMediumSample {
-        bool in_medium = false;   // a point was drawn inside the media
-        bool seen = false;        // it sees the receiver
-        bool lit = false;         // it sees the emitter and the receiver
-        vec3 single{0.0f};        // the irradiance estimate
-        bool second_lit = false;  // its second-scattering point sees the emitter
-        vec3 multiple{0.0f};      // order 2 through it (second_scatter)
+        bool in_medium = false;  // a point was drawn inside the media
+        bool seen = false;       // it sees the receiver
+        bool lit = false;        // it sees the emitter and the receiver
+        vec3 single{0.0f};       // the irradiance estimate
+        vec3 multiple{0.0f};     // order 2 through it (second_scatter)
     };
     // An emitter sample seen from a point x (emitter: its point, unused for distant ones).
     struct EmitterSeen {
@@ -147,7 +146,6 @@ class BakeEstimator {
     // point x2 by HG sampling about w and a free flight through the real media and geometry,
     // NEE from x2 to the emitter. radiance x sigma_s(x) is unbiased for order 2 through x.
     struct SecondScatter {
-        bool lit = false;  // x2 exists and sees the emitter
         vec3 radiance{0.0f};
     };
     // Order 2 through the medium point m (seen by the receiver) into r.multiple; to_receiver:
