@@ -50,8 +50,8 @@ LightSample sample_light(const Light& light, const vec3& p, vec2 u) {
             const float area = glm::length(cross);
             s.emitter_normal = cross / area;
             s.emitter_cos = -glm::dot(s.direction, s.emitter_normal);
+            s.intensity = light.intensity * area;  // kept behind the quad (its lit medium)
             if (s.emitter_cos <= 0.0f) return s;
-            s.intensity = light.intensity * area;
             s.irradiance = light.intensity * (area * s.emitter_cos / (s.distance * s.distance));
             break;
         }

@@ -134,7 +134,8 @@ struct Light {
 // (environment and sky light is EnvironmentMap::sample's). A quad is sampled uniformly on its
 // area and converted to solid angle; it emits on its edge_u x edge_v side only.
 struct LightSample {
-    bool valid = false;         // false: p behind the quad, or on the point light
+    bool valid = false;         // false: p behind the quad (direction, distance, intensity and
+                                // emitter_normal still set), or on the point light
     vec3 direction{0.0f};       // from p towards the sampled point, unit
     float distance = INFINITY;  // to it; infinite for a directional light
     vec3 irradiance{0.0f};      // at p on a plane facing the light: radiance / solid-angle pdf

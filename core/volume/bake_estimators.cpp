@@ -127,8 +127,7 @@ void BakeEstimator::sample_emitters(const vec3& p, CounterRng& rng,
                     s.dir = ls.direction;
                     s.distance = ls.distance;
                     s.emitter_normal = ls.emitter_normal;
-                    s.intensity =
-                        light.intensity * glm::length(glm::cross(light.edge_u, light.edge_v));
+                    s.intensity = ls.intensity;
                     s.behind = true;
                     out.push_back(s);
                     continue;
@@ -382,7 +381,8 @@ void BakeEstimator::add_lit_medium(const EmitterSample& s, const vec3& p, const 
 
 BakeEstimator::MediumPoint BakeEstimator::draw_medium_point(const vec3& p, const vec3& n,
                                                             const vec3* emitter, CounterRng& rng,
-                                                            BakeCounters& counters) const {
+                                                            BakeCounters& counters,
+                                                            bool whole_ray) const {
     MediumPoint m;
     // Three numbers whatever happens: the streams of later vertices stay aligned.
     const float u1 = rng.next_float(), u2 = rng.next_float();
@@ -400,8 +400,8 @@ BakeEstimator::MediumPoint BakeEstimator::draw_medium_point(const vec3& p, const
         t_end = hit.valid ? double(hit.distance) : kInfinity;
         m.check_path = false;
     }
-    if (!(t_end > 0.0)) return m;
-    m.t_end = t_end;
+    if (!(t_end > 0.0) && !whole_ray) return m;
+    m.t_end = std::max(t_end, 0.0);
     if (!emitter) {
         // Free flight at the segment's mean extinction (the exact optics of the estimates
         // make any positive pdf unbiased).
@@ -421,13 +421,14 @@ BakeEstimator::MediumPoint BakeEstimator::draw_medium_point(const vec3& p, const
         const double delta = glm::dot(oc, glm::dvec3(m.w));
         const double h = glm::length(oc - delta * glm::dvec3(m.w));
         EquiangularSample ea;
-        if (h < 1e-9 || !sample_equiangular(delta, h, 0.0, t_end, u3, &ea)) return m;
+        if (h < 1e-9 || !sample_equiangular(delta, h, 0.0, whole_ray ? kInfinity : t_end, u3, &ea))
+            return m;
         m.t = ea.t;
         m.pdf = ea.pdf;
     }
     if (!(m.pdf > 0.0) || !std::isfinite(m.t)) return m;
     m.x = m.o + m.w * float(m.t);
-    m.here = media_.at(m.x);
+    if (m.t < m.t_end) m.here = media_.at(m.x);  // beyond: no medium of the scene's
     m.valid = m.here.sigma_s > 0.0;
     return m;
 }
@@ -690,9 +691,9 @@ vec3 BakeEstimator::local_single_correction(const EmitterSample& s, const vec3& 
     // sigma_s f(l.w) I emission e^-st (t + r) / r^2, r = |e - x|, over all t >= 0: the point is
     // drawn equiangular about e on the whole ray, the real integrand is 0 past the media's exit
     // or the first surface.
-    const float u1 = rng.next_float(), u2 = rng.next_float();
-    const double u3 = rng.next_double();
     // An empty model where the tables brought nothing (as single_correction).
+    const vec3 emitter = p + s.dir * float(s.distance);
+    const MediumPoint m = draw_medium_point(p, n, &emitter, rng, counters, true);
     const SegmentOptics optics = segment_optics(p, s.dir, s.distance, rng);
     HomogeneousMedium model =
         optics.tau_s > 0.0 ? optics.effective() : HomogeneousMedium{0.0, 0.0, 0.0};
@@ -700,54 +701,28 @@ vec3 BakeEstimator::local_single_correction(const EmitterSample& s, const vec3& 
         model = HomogeneousMedium{0.0, 0.0, 0.0};
     const double st = model.sigma_t();
     const double g_model = std::clamp(model.g, -kGRange, kGRange);
-    const vec3 local_dir = sample_cosine_hemisphere(u1, u2);
-    if (local_dir.z <= 1e-6f) return vec3(0.0f);
-    const vec3 w = Frame(n).to_world(local_dir);
-    const vec3 o = origin(p, n);
-    const vec3 emitter = p + s.dir * float(s.distance);
-    const glm::dvec3 oc = glm::dvec3(emitter) - glm::dvec3(o);
-    const double delta = glm::dot(oc, glm::dvec3(w));
-    const double h = glm::length(oc - delta * glm::dvec3(w));
-    EquiangularSample ea;
-    if (h < 1e-9 || !sample_equiangular(delta, h, 0.0, kInfinity, u3, &ea)) return vec3(0.0f);
-    const double t = ea.t;
-    if (!std::isfinite(t) || !(ea.pdf > 0.0)) return vec3(0.0f);
-    const vec3 x = o + w * float(t);
-    const glm::dvec3 to = glm::dvec3(emitter) - glm::dvec3(x);
+    if (!(m.pdf > 0.0) || !std::isfinite(m.t)) return vec3(0.0f);
+    const glm::dvec3 to = glm::dvec3(emitter) - glm::dvec3(m.x);
     const double r = glm::length(to);
     if (!(r > 0.0)) return vec3(0.0f);
     const glm::dvec3 l = to / r;
-    const double cos_lw = glm::dot(l, glm::dvec3(w));
+    const double cos_lw = glm::dot(l, glm::dvec3(m.w));
     const double emission_model = s.kind == EmitterKind::Area
                                       ? std::max(0.0, -glm::dot(l, glm::dvec3(s.emitter_normal)))
                                       : 1.0;
     const double model_here = model.sigma_s * hg_phase(g_model, cos_lw) * emission_model *
-                              std::exp(-st * (t + r)) / (r * r) / ea.pdf;
+                              std::exp(-st * (m.t + r)) / (r * r) / m.pdf;
     vec3 real_here(0.0f);
-    double t_end = media_.exit_distance(o, w);
-    bool check_path = true;
-    if (!std::isfinite(t_end)) {
-        ++counters.rays;
-        const SurfaceHit hit = scene_.intersect(Ray{o, w, 0.0f, INFINITY});
-        t_end = hit.valid ? double(hit.distance) : kInfinity;
-        check_path = false;
-    }
-    const HomogeneousMedium here = t < t_end ? media_.at(x) : HomogeneousMedium{0.0, 0.0, 0.0};
-    if (here.sigma_s > 0.0) {
-        const EmitterSeen at = emitter_seen(s, emitter, x);
-        bool lit = at.valid;
-        if (lit && check_path) {
+    if (m.valid) {
+        const EmitterSeen at = emitter_seen(s, emitter, m.x);
+        if (at.valid && sees_receiver(m, counters)) {
             ++counters.rays;
-            lit = !scene_.occluded(shadow_ray(o, w, t));
+            if (!scene_.occluded(shadow_ray(m.x, at.l, at.distance)))
+                real_here =
+                    at.strength * float(media_.transmittance(m.o, m.w, m.t) * m.here.sigma_s *
+                                        hg_phase(m.here.g, glm::dot(at.l, m.w)) *
+                                        media_.transmittance(m.x, at.l, at.to_emitter) / m.pdf);
         }
-        if (lit) {
-            ++counters.rays;
-            lit = !scene_.occluded(shadow_ray(x, at.l, at.distance));
-        }
-        if (lit)
-            real_here = at.strength * float(media_.transmittance(o, w, t) * here.sigma_s *
-                                            hg_phase(here.g, glm::dot(at.l, w)) *
-                                            media_.transmittance(x, at.l, at.to_emitter) / ea.pdf);
     }
     return float(kPiD) * (real_here - s.intensity * float(model_here));
 }

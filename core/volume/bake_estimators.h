@@ -168,8 +168,10 @@ class BakeEstimator {
     // The same for a point or area emitter sample (the tables' infinite-medium model).
     vec3 local_single_correction(const EmitterSample& s, const vec3& p, const vec3& n,
                                  CounterRng& rng, BakeCounters& counters) const;
+    // whole_ray (with an emitter): t equiangular over [0, infinity); valid only before t_end.
     MediumPoint draw_medium_point(const vec3& p, const vec3& n, const vec3* emitter,
-                                  CounterRng& rng, BakeCounters& counters) const;
+                                  CounterRng& rng, BakeCounters& counters,
+                                  bool whole_ray = false) const;
     bool sees_receiver(const MediumPoint& m, BakeCounters& counters) const;
     // Light reflected by surfaces the receiver cannot see, scattered once in the medium in
     // front of it towards it: x by draw_medium_point, HG sampling at x to a surface y, y's
