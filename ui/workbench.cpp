@@ -194,6 +194,9 @@ void draw_timeline(Workbench::State& s) {
                     p.eta_s >= 0 ? (std::to_string(int(p.eta_s + 0.5)) + " s").c_str() : "--");
         ImGui::SameLine();
         if (ImGui::SmallButton("cancel")) s.job->cancel();
+    } else if (s.shown && s.shown->environment_view) {
+        ImGui::Text("environment bandwidth: %d levels   %s", s.shown->stats["levels"].get<int>(),
+                    s.status.c_str());
     } else if (s.shown && s.options.show_timings) {
         ImGui::Text("frame %d: %.1f ms, %ld rays   %s", s.shown->frame,
                     s.shown->stats["time_ms"].get<double>(), s.shown->stats["rays"].get<long>(),
@@ -427,6 +430,9 @@ ScreenRect Workbench::colorbar_rect() const {
 }
 std::vector<std::pair<std::string, ScreenRect>> Workbench::legend_swatches() const {
     return s_->legend;
+}
+const std::string& Workbench::status() const {
+    return s_->status;
 }
 const std::string& Workbench::error() const {
     return s_->error;

@@ -92,6 +92,10 @@ class Workbench {
     const ImageMetrics* metrics() const;
     bool tables_ready() const;  // the tables panel has its tables
     void show_env_bandwidth();  // switches the viewport to it (waits for the hierarchy)
+    // The name exported files of the shown result start with: scene, frame (or the
+    // environment view) and layer.
+    std::string export_stem() const;
+    const std::string& status() const;
 
     struct State;  // defined in workbench.cpp; public so its helper functions can name it
 

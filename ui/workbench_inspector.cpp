@@ -59,7 +59,10 @@ void draw_inspector(Workbench& wb, Workbench::State& s) {
         ImGui::TextWrapped("Click a pixel in the viewport to see every layer's value there.");
         return;
     }
-    ImGui::Text("pixel (%d, %d), frame %d", s.pick_x, s.pick_y, s.shown->frame);
+    if (s.shown->environment_view)
+        ImGui::Text("texel (%d, %d) of the environment bandwidth view", s.pick_x, s.pick_y);
+    else
+        ImGui::Text("pixel (%d, %d), frame %d", s.pick_x, s.pick_y, s.shown->frame);
     ImGui::Separator();
     for (const InspectorRow& row : wb.inspect()) {
         std::string values;

@@ -60,6 +60,9 @@ void attach_reference(Workbench::State& s, int frame) {
 namespace {
 
 std::string file_stem(const Workbench::State& s) {
+    // The environment view is no frame of the animation: its files say what they hold.
+    if (s.shown && s.shown->environment_view)
+        return s.scene.name + "_environment_bandwidth_" + s.layer_name;
     char stem[128];
     std::snprintf(stem, sizeof stem, "%s_frame%04d_%s", s.scene.name.c_str(),
                   s.shown ? s.shown->frame : s.frame, s.layer_name.c_str());
@@ -67,6 +70,10 @@ std::string file_stem(const Workbench::State& s) {
 }
 
 }  // namespace
+
+std::string Workbench::export_stem() const {
+    return file_stem(*s_);
+}
 
 void poll_reference(Workbench::State& s) {
     if (!s.reference_job || !s.reference_job->done()) return;
@@ -80,6 +87,12 @@ void poll_reference(Workbench::State& s) {
 
 void start_reference(Workbench::State& s) {
     if (s.reference_job || !s.shown || !s.device) return;
+    if (s.shown->environment_view) {
+        // It has no reference image: rendering "its frame" would render an animation frame
+        // that does not exist.
+        s.status = "the environment bandwidth view has no reference";
+        return;
+    }
     if (s.bake) {  // method B: the reference is a VPT bake seen from the same camera
         start_bake_reference(s);
         return;

@@ -434,3 +434,24 @@ TEST(GlWorkbench, ApplySettingRerendersOnACacheSetting) {
     ASSERT_EQ(after.size(), before.size());
     EXPECT_NE(after, before) << "the frame was not rendered again with the new cache setting";
 }
+
+// The environment bandwidth view is not a frame of the animation (it was flagged by the magic
+// frame -100, then -1): its exports say what they hold and it has no reference to render (a
+// request used to start a reference render of the non-existent frame).
+TEST(GlWorkbench, EnvironmentViewIsNoFrame) {
+    GlSession gl;
+    WorkbenchOptions o = small_scene("");
+    o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/rotor.json";
+    Workbench wb(o);
+    run_until_shown(gl, wb);
+    EXPECT_NE(wb.export_stem().find("_frame0000_"), std::string::npos) << wb.export_stem();
+    wb.show_env_bandwidth();
+    run_until_shown(gl, wb);
+    ASSERT_NE(wb.layers(), nullptr);
+    const std::string stem = wb.export_stem();
+    EXPECT_EQ(stem.find("frame"), std::string::npos) << stem;
+    EXPECT_NE(stem.find("environment_bandwidth"), std::string::npos) << stem;
+    wb.request_reference();
+    EXPECT_FALSE(wb.reference_busy()) << "a reference render of the environment view started";
+    EXPECT_NE(wb.status().find("no reference"), std::string::npos) << wb.status();
+}
