@@ -4,28 +4,6 @@
 
 namespace freqlab {
 
-const char* to_string(LayerKind kind) {
-    switch (kind) {
-        case LayerKind::Color:
-            return "color";
-        case LayerKind::Continuous:
-            return "continuous";
-        case LayerKind::Signed:
-            return "signed";
-        case LayerKind::Categorical:
-            return "categorical";
-    }
-    return "?";
-}
-
-LayerKind layer_kind_from_string(const std::string& s) {
-    for (LayerKind k :
-         {LayerKind::Color, LayerKind::Continuous, LayerKind::Signed, LayerKind::Categorical})
-        if (s == to_string(k)) return k;
-    throw Error("", "kind",
-                "expected one of color, continuous, signed, categorical; got \"" + s + "\"");
-}
-
 std::vector<std::string> Layer::channel_names() const {
     static const char* rgb[] = {"R", "G", "B", "A"};
     static const char* xyz[] = {"X", "Y", "Z", "W"};

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "base/enum_names.h"
 #include "math/types.h"
 
 namespace freqlab {
@@ -18,8 +19,16 @@ enum class LayerKind {
     Categorical,  // small integers with a legend: one palette colour per category
 };
 
-const char* to_string(LayerKind kind);
-LayerKind layer_kind_from_string(const std::string& s);  // throws Error on unknown names
+inline constexpr EnumName<LayerKind> kLayerKindNames[] = {{LayerKind::Color, "color"},
+                                                          {LayerKind::Continuous, "continuous"},
+                                                          {LayerKind::Signed, "signed"},
+                                                          {LayerKind::Categorical, "categorical"}};
+inline const char* to_string(LayerKind kind) {
+    return enum_name(kLayerKindNames, kind);
+}
+inline LayerKind layer_kind_from_string(const std::string& s) {  // throws Error naming "kind"
+    return enum_from_name(kLayerKindNames, s, "kind");
+}
 
 struct Layer {
     std::string name;

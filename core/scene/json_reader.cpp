@@ -111,7 +111,7 @@ std::string JsonReader::string() const {
     return value_->get<std::string>();
 }
 
-std::string JsonReader::one_of(std::initializer_list<const char*> names) const {
+std::string JsonReader::one_of(const std::vector<const char*>& names) const {
     std::string list;
     for (const char* n : names) list += (list.empty() ? "" : ", ") + std::string(n);
     if (!value_->is_string()) fail("expected one of " + list + ", got " + got());

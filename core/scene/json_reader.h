@@ -5,9 +5,11 @@
 
 #include <initializer_list>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "base/enum_names.h"
 #include "math/types.h"
 
 namespace freqlab {
@@ -39,7 +41,15 @@ class JsonReader {
     int integer_in(int lo, int hi) const;
     bool boolean() const;
     std::string string() const;
-    std::string one_of(std::initializer_list<const char*> names) const;
+    std::string one_of(const std::vector<const char*>& names) const;
+    // The value an enum's name table gives this string (base/enum_names.h).
+    template <class E, std::size_t N>
+    E one_of(const EnumName<E> (&table)[N]) const {
+        const std::string name = one_of(enum_names(table));
+        for (const EnumName<E>& e : table)
+            if (name == e.name) return e.value;
+        return table[0].value;  // one_of() threw already
+    }
     vec3 vector3() const;    // [x, y, z], finite
     vec3 direction() const;  // non-zero vector3, normalised
     vec3 color() const;      // [r, g, b] >= 0, or a single number for grey

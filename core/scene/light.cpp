@@ -8,22 +8,6 @@
 
 namespace freqlab {
 
-const char* to_string(LightType type) {
-    switch (type) {
-        case LightType::Environment:
-            return "envmap";
-        case LightType::Sky:
-            return "sky";
-        case LightType::Point:
-            return "point";
-        case LightType::Directional:
-            return "directional";
-        case LightType::Quad:
-            return "quad";
-    }
-    return "?";
-}
-
 LightSample sample_light(const Light& light, const vec3& p, vec2 u) {
     LightSample s;
     switch (light.type) {

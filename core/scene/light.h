@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "base/enum_names.h"
 #include "base/huge_pages.h"
 #include "image/image_io.h"
 #include "math/distribution.h"
@@ -116,7 +117,14 @@ struct ProceduralSky {
 };
 
 enum class LightType { Environment, Sky, Point, Directional, Quad };
-const char* to_string(LightType type);
+inline constexpr EnumName<LightType> kLightTypeNames[] = {{LightType::Environment, "envmap"},
+                                                          {LightType::Sky, "sky"},
+                                                          {LightType::Point, "point"},
+                                                          {LightType::Directional, "directional"},
+                                                          {LightType::Quad, "quad"}};
+inline const char* to_string(LightType type) {
+    return enum_name(kLightTypeNames, type);
+}
 
 struct Light {
     LightType type = LightType::Point;

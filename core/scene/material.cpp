@@ -4,22 +4,6 @@
 
 namespace freqlab {
 
-const char* to_string(BrdfType type) {
-    switch (type) {
-        case BrdfType::Lambert:
-            return "lambert";
-        case BrdfType::Phong:
-            return "phong";
-        case BrdfType::Beckmann:
-            return "beckmann";
-        case BrdfType::Ggx:
-            return "ggx";
-        case BrdfType::Mirror:
-            return "mirror";
-    }
-    return "?";
-}
-
 vec3 Texture::eval(vec2 uv) const {
     switch (kind) {
         case Kind::Constant:

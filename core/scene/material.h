@@ -7,13 +7,21 @@
 #include <memory>
 #include <string>
 
+#include "base/enum_names.h"
 #include "image/image_io.h"
 #include "math/types.h"
 
 namespace freqlab {
 
 enum class BrdfType { Lambert, Phong, Beckmann, Ggx, Mirror };
-const char* to_string(BrdfType type);
+inline constexpr EnumName<BrdfType> kBrdfTypeNames[] = {{BrdfType::Lambert, "lambert"},
+                                                        {BrdfType::Phong, "phong"},
+                                                        {BrdfType::Beckmann, "beckmann"},
+                                                        {BrdfType::Ggx, "ggx"},
+                                                        {BrdfType::Mirror, "mirror"}};
+inline const char* to_string(BrdfType type) {
+    return enum_name(kBrdfTypeNames, type);
+}
 
 struct Texture {
     enum class Kind { Constant, Checker, Image } kind = Kind::Constant;

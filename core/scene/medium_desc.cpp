@@ -6,22 +6,6 @@
 
 namespace freqlab {
 
-const char* to_string(DensitySource source) {
-    switch (source) {
-        case DensitySource::Constant:
-            return "constant";
-        case DensitySource::Noise:
-            return "noise";
-        case DensitySource::HeightFog:
-            return "height_fog";
-        case DensitySource::Brushes:
-            return "brushes";
-        case DensitySource::Vdb:
-            return "vdb";
-    }
-    return "?";
-}
-
 namespace {
 
 ivec3 read_resolution(const JsonReader& r) {

@@ -16,13 +16,22 @@
 
 #include <nlohmann/json.hpp>
 
+#include "base/enum_names.h"
 #include "math/types.h"
 
 namespace freqlab {
 
 enum class MediumBounds { Everywhere, Box, Sphere };
 enum class DensitySource { Constant, Noise, HeightFog, Brushes, Vdb };
-const char* to_string(DensitySource source);
+inline constexpr EnumName<DensitySource> kDensitySourceNames[] = {
+    {DensitySource::Constant, "constant"},
+    {DensitySource::Noise, "noise"},
+    {DensitySource::HeightFog, "height_fog"},
+    {DensitySource::Brushes, "brushes"},
+    {DensitySource::Vdb, "vdb"}};
+inline const char* to_string(DensitySource source) {
+    return enum_name(kDensitySourceNames, source);
+}
 
 struct DensityBrush {
     enum class Shape { Box, Ellipsoid } shape = Shape::Box;

@@ -130,13 +130,7 @@ Material read_material(const JsonReader& r, const std::string& name, LoadContext
     r.only_keys({"type", "albedo", "exponent", "roughness"});
     Material m;
     m.name = name;
-    const std::string type =
-        r.get("type").one_of({"lambert", "phong", "beckmann", "ggx", "mirror"});
-    m.type = type == "lambert"    ? BrdfType::Lambert
-             : type == "phong"    ? BrdfType::Phong
-             : type == "beckmann" ? BrdfType::Beckmann
-             : type == "ggx"      ? BrdfType::Ggx
-                                  : BrdfType::Mirror;
+    m.type = r.get("type").one_of(kBrdfTypeNames);
     if (r.has("albedo")) m.albedo = read_texture(r.get("albedo"), ctx);
     if (m.type == BrdfType::Phong)
         m.phong_exponent = float(r.get("exponent").number_in(0, 1e6, true));
@@ -235,11 +229,9 @@ std::shared_ptr<const TriangleMesh> read_shape(const JsonReader& r, SceneObject&
 
 Light read_light(const JsonReader& r, LoadContext& ctx) {
     Light l;
-    const std::string type =
-        r.get("type").one_of({"envmap", "sky", "point", "directional", "quad"});
-    if (type == "envmap") {
+    l.type = r.get("type").one_of(kLightTypeNames);
+    if (l.type == LightType::Environment) {
         r.only_keys({"type", "file", "radiance", "rotation_deg", "rotation_deg_per_s", "scale"});
-        l.type = LightType::Environment;
         if (r.has("file") == r.has("radiance"))
             r.fail(
                 "expected exactly one of \"file\" (a lat-long EXR) or \"radiance\" (a constant)");
@@ -261,10 +253,9 @@ Light read_light(const JsonReader& r, LoadContext& ctx) {
             source, image, float(r.number_or("rotation_deg", 0.0, -1e6, 1e6)),
             float(r.number_or("scale", 1.0, 0.0, 1e9)),
             float(r.number_or("rotation_deg_per_s", 0.0, -1e6, 1e6)));
-    } else if (type == "sky") {
+    } else if (l.type == LightType::Sky) {
         r.only_keys({"type", "sun_direction", "sun_radius_deg", "sun_radiance", "zenith", "horizon",
                      "ground", "resolution"});
-        l.type = LightType::Sky;
         if (r.has("sun_direction")) l.sky.sun_direction = r.get("sun_direction").direction();
         l.sky.sun_angular_radius_deg = float(r.number_or("sun_radius_deg", 0.53, 0.01, 45));
         l.sky.sun_radiance = r.color_or("sun_radiance", l.sky.sun_radiance);
@@ -274,19 +265,16 @@ Light read_light(const JsonReader& r, LoadContext& ctx) {
         const int height = r.has("resolution") ? r.get("resolution").integer_in(8, 8192) : 1024;
         l.environment =
             std::make_shared<EnvironmentMap>("sky", l.sky.bake(2 * height, height), 0.0f, 1.0f);
-    } else if (type == "point") {
+    } else if (l.type == LightType::Point) {
         r.only_keys({"type", "position", "intensity"});
-        l.type = LightType::Point;
         l.position = r.get("position").vector3();
         l.intensity = r.get("intensity").color();
-    } else if (type == "directional") {
+    } else if (l.type == LightType::Directional) {
         r.only_keys({"type", "direction", "irradiance"});
-        l.type = LightType::Directional;
         l.direction = r.get("direction").direction();
         l.intensity = r.get("irradiance").color();
     } else {
         r.only_keys({"type", "corner", "edge_u", "edge_v", "radiance"});
-        l.type = LightType::Quad;
         l.corner = r.get("corner").vector3();
         l.edge_u = r.get("edge_u").vector3();
         l.edge_v = r.get("edge_v").vector3();

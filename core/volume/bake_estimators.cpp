@@ -32,42 +32,27 @@ bool finite(const vec3& v) {
 
 }  // namespace
 
-const char* to_string(BakeMethod m) {
-    switch (m) {
-        case BakeMethod::Surface:
-            return "surface";
-        case BakeMethod::Extinction:
-            return "extinction";
-        case BakeMethod::Impulse:
-            return "impulse";
-        case BakeMethod::Vpt:
-            return "vpt";
-    }
-    return "?";
-}
-
 const std::vector<BakeMethod>& bake_methods() {
-    static const std::vector<BakeMethod> all = {BakeMethod::Surface, BakeMethod::Extinction,
-                                                BakeMethod::Impulse, BakeMethod::Vpt};
+    static const std::vector<BakeMethod> all = [] {
+        std::vector<BakeMethod> v;
+        for (const EnumName<BakeMethod>& e : kBakeMethodNames) v.push_back(e.value);
+        return v;
+    }();
     return all;
 }
 
 std::string bake_method_list(const std::string& separator) {
-    std::string list;
-    for (BakeMethod m : bake_methods()) list += (list.empty() ? "" : separator) + to_string(m);
-    return list;
+    return enum_name_list(kBakeMethodNames, separator.c_str());
 }
 
 bool is_bake_method(const std::string& name) {
-    for (BakeMethod m : bake_methods())
-        if (name == to_string(m)) return true;
+    for (const EnumName<BakeMethod>& e : kBakeMethodNames)
+        if (name == e.name) return true;
     return false;
 }
 
 BakeMethod parse_bake_method(const std::string& text) {
-    for (BakeMethod m : bake_methods())
-        if (text == to_string(m)) return m;
-    throw Error("--method", text, "expected one of: " + bake_method_list(", "));
+    return enum_from_name(kBakeMethodNames, text, "--method");
 }
 
 BakeEstimator::BakeEstimator(const RayScene& scene, const Media& media, const ImpulseTables* tables,

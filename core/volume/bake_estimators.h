@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "accel/ray_scene.h"
+#include "base/enum_names.h"
 #include "math/rng.h"
 #include "settings/bake_settings.h"
 #include "volume/impulse_irradiance.h"
@@ -38,7 +39,13 @@
 namespace freqlab {
 
 enum class BakeMethod { Surface, Extinction, Impulse, Vpt };
-const char* to_string(BakeMethod m);
+inline constexpr EnumName<BakeMethod> kBakeMethodNames[] = {{BakeMethod::Surface, "surface"},
+                                                            {BakeMethod::Extinction, "extinction"},
+                                                            {BakeMethod::Impulse, "impulse"},
+                                                            {BakeMethod::Vpt, "vpt"}};
+inline const char* to_string(BakeMethod m) {
+    return enum_name(kBakeMethodNames, m);
+}
 BakeMethod parse_bake_method(const std::string& text);  // throws Error naming --method
 // Every bake method in enum order, and them joined by `separator` (help texts, menus).
 const std::vector<BakeMethod>& bake_methods();

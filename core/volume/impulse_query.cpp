@@ -89,37 +89,4 @@ const char* normalization_of(EmitterKind e) {
     return "";
 }
 
-EmitterKind parse_emitter(const std::string& s) {
-    if (s == "point") return EmitterKind::Point;
-    if (s == "directional") return EmitterKind::Directional;
-    if (s == "area") return EmitterKind::Area;
-    throw Error("--emitter", s, "expected point, directional or area");
-}
-
-TableVariant parse_variant(const std::string& s) {
-    if (s == "infinite") return TableVariant::Infinite;
-    if (s == "surface") return TableVariant::Surface;
-    throw Error("--variant", s, "expected infinite or surface");
-}
-
-const char* to_string(EmitterKind e) {
-    return e == EmitterKind::Point         ? "point"
-           : e == EmitterKind::Directional ? "directional"
-                                           : "area";
-}
-
-Receiver parse_receiver(const std::string& s) {
-    if (s == "medium") return Receiver::InMedium;
-    if (s == "surface") return Receiver::OnSurface;
-    throw Error("--receiver", s, "expected medium or surface");
-}
-
-const char* to_string(Receiver r) {
-    return r == Receiver::InMedium ? "medium" : "surface";
-}
-
-const char* to_string(TableVariant v) {
-    return v == TableVariant::Infinite ? "infinite" : "surface";
-}
-
 }  // namespace freqlab

@@ -24,6 +24,7 @@
 
 #include <string>
 
+#include "base/enum_names.h"
 #include "volume/impulse_tables.h"
 
 namespace freqlab {
@@ -59,11 +60,31 @@ struct ImpulseResponse {
 void validate(const ImpulseQuery& query, int table_bounces);
 ImpulseResponse query_impulse(const ImpulseTables& tables, const ImpulseQuery& query);
 const char* normalization_of(EmitterKind emitter);
-EmitterKind parse_emitter(const std::string& text);   // throws Error on --emitter
-TableVariant parse_variant(const std::string& text);  // throws Error on --variant
-Receiver parse_receiver(const std::string& text);     // throws Error on --receiver
-const char* to_string(EmitterKind emitter);
-const char* to_string(TableVariant variant);
-const char* to_string(Receiver receiver);
+inline constexpr EnumName<EmitterKind> kEmitterKindNames[] = {
+    {EmitterKind::Point, "point"},
+    {EmitterKind::Directional, "directional"},
+    {EmitterKind::Area, "area"}};
+inline constexpr EnumName<TableVariant> kTableVariantNames[] = {
+    {TableVariant::Infinite, "infinite"}, {TableVariant::Surface, "surface"}};
+inline constexpr EnumName<Receiver> kReceiverNames[] = {{Receiver::InMedium, "medium"},
+                                                        {Receiver::OnSurface, "surface"}};
+inline EmitterKind parse_emitter(const std::string& text) {
+    return enum_from_name(kEmitterKindNames, text, "--emitter");
+}
+inline TableVariant parse_variant(const std::string& text) {
+    return enum_from_name(kTableVariantNames, text, "--variant");
+}
+inline Receiver parse_receiver(const std::string& text) {
+    return enum_from_name(kReceiverNames, text, "--receiver");
+}
+inline const char* to_string(EmitterKind emitter) {
+    return enum_name(kEmitterKindNames, emitter);
+}
+inline const char* to_string(TableVariant variant) {
+    return enum_name(kTableVariantNames, variant);
+}
+inline const char* to_string(Receiver receiver) {
+    return enum_name(kReceiverNames, receiver);
+}
 
 }  // namespace freqlab
