@@ -14,6 +14,7 @@
 #include "shared_tables.h"
 #include "volume/impulse_irradiance.h"
 #include "volume/lightmap_baker.h"
+#include "volume/texel_filter.h"
 
 using namespace freqlab;
 
@@ -432,4 +433,100 @@ TEST(Bake, TexelEstimateIsWhatTheBakeStoredOnEveryLightmap) {
     }
     EXPECT_GE(checked, 20);
     EXPECT_GT(differs_as_lightmap0, checked / 2);
+}
+
+// Impulse defers its Monte Carlo terms and the baker filters them over neighbouring texels
+// (volume/texel_filter.h): texel_estimate, what --debug-texel prints, re-runs the window and
+// filters it the same way, so it is still what the bake stored; unfiltered it is not.
+TEST(Bake, ImpulseTexelEstimateIsTheFilteredBakedTexel) {
+    Fixture f(R"({"frames": 1, "camera": {"position": [0, -5, 3], "look_at": [0, 0, 0]},
+      "materials": {"m": {"type": "lambert", "albedo": 0.7}},
+      "objects": [{"shape": {"type": "plane", "size": [4, 4]}, "material": "m"},
+                  {"shape": {"type": "box", "size": [1, 1, 1]}, "material": "m",
+                   "transform": {"translate": [0.8, 0, 0.5]}}],
+      "lights": [{"type": "point", "position": [-0.5, -0.5, 2.0], "intensity": 8}],
+      "media": [{"sigma_s": 0.4, "sigma_a": 0.05, "g": 0.3,
+                 "bounds": {"box": {"min": [-2, -2, 0], "max": [2, 2, 2.5]}}}]})");
+    const ImpulseTables& tables = test_support::shared_impulse_tables();
+    BakeSettings s;
+    s.spp = 8;
+    s.bounces = 1;
+    s.texel_density = 4.0f;
+    s.texel_mc_rate = 0.25f;
+    s.texel_mc_radius = 2;
+    s.probes_x = 0;
+    LightmapBaker baker(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
+    baker.run();
+    const ObjectLightmap& floor = baker.lightmaps()[0];
+    const Layer& stored = baker.layers(0).get("lm_irradiance");
+    const BakeEstimator estimator(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
+    BakeSettings own = s;
+    own.texel_mc_radius = 0;
+    const BakeEstimator unfiltered(*f.rays, f.media, &tables, BakeMethod::Impulse, own);
+    int checked = 0, differs_unfiltered = 0;
+    for (size_t i = 0; i < floor.texels.size() && checked < 30; i += 5) {
+        if (floor.texels[i].state != TexelState::Valid) continue;
+        ++checked;
+        const float baked = stored.data[i * 3];
+        const float mine =
+            texel_estimate(estimator, baker.lightmaps(), 0, i, s.seed, s.spp).total().x;
+        EXPECT_NEAR(mine, baked, 1e-5f * std::max(1.0f, baked)) << "texel " << i;
+        const float alone =
+            texel_estimate(unfiltered, baker.lightmaps(), 0, i, s.seed, s.spp).total().x;
+        if (std::abs(alone - baked) > 1e-3f * std::max(1.0f, baked)) ++differs_unfiltered;
+    }
+    EXPECT_GE(checked, 20);
+    EXPECT_GT(differs_unfiltered, checked / 2);
+}
+
+// The filter of the deferred terms: a constant field stays constant (a box filter of the
+// texel's own surface); texels across a shadow's edge (a different occluded-light mask), on
+// another chart (the box's faces next to the floor's texels in the atlas) or with twice the
+// light are never averaged in.
+TEST(Bake, TexelFilterAveragesOnlyTheTexelsOwnSurfaceAndShadowSide) {
+    Fixture f(kPlaneAndBox);
+    AtlasSettings a;
+    a.texel_density = 4.0f;
+    const std::vector<ObjectLightmap> maps = build_lightmaps(*f.rays, a);
+    ASSERT_EQ(maps.size(), 2u);
+    for (const ObjectLightmap& map : maps) {
+        const size_t n = map.texels.size();
+        TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 1.0f)};
+        std::vector<IrradianceParts> sums(n);
+        for (size_t i = 0; i < n; ++i) {
+            const LightmapTexel& t = map.texels[i];
+            // Left of x = 0 "in a shadow", with a field of 10 there and 1 elsewhere.
+            guide.shadows[i] = t.position.x < 0.0f ? 1 : 0;
+            sums[i].single =
+                vec3(t.state == TexelState::Valid ? (guide.shadows[i] ? 10.0f : 1.0f) : 1000.0f);
+        }
+        const std::vector<IrradianceParts> out = filter_texel_sums(map, sums, guide, 2);
+        long averaged = 0;
+        for (size_t i = 0; i < n; ++i) {
+            if (map.texels[i].state != TexelState::Valid) {
+                EXPECT_EQ(out[i].single.x, 0.0f);
+                continue;
+            }
+            EXPECT_FLOAT_EQ(out[i].single.x, sums[i].single.x) << "texel " << i;
+            const std::vector<size_t> near = texel_filter_neighbours(map, guide, i, 2);
+            averaged += long(near.size());
+            for (size_t j : near) {
+                EXPECT_GT(glm::dot(map.texels[j].normal, map.texels[i].normal), 0.9f);
+                EXPECT_EQ(guide.shadows[j], guide.shadows[i]);
+            }
+        }
+        EXPECT_GT(averaged, long(map.count(TexelState::Valid)) * 4) << "the filter averages";
+        // A neighbour with twice the light is left out.
+        for (size_t i = 0; i < n; ++i) {
+            if (map.texels[i].state != TexelState::Valid) continue;
+            const std::vector<size_t> near = texel_filter_neighbours(map, guide, i, 1);
+            if (near.size() < 3) continue;
+            const size_t j = near[0] == i ? near[1] : near[0];
+            guide.light[j] = 2.0f;
+            const std::vector<size_t> after = texel_filter_neighbours(map, guide, i, 1);
+            EXPECT_EQ(after.size(), near.size() - 1);
+            EXPECT_EQ(std::count(after.begin(), after.end(), j), 0);
+            break;
+        }
+    }
 }

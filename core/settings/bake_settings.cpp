@@ -41,6 +41,18 @@ const SettingsSchema& BakeSettings::schema() {
                    "media's and geometry's integrand minus the model's (a control variate: "
                    "media edges, heterogeneity and shadows the tables cannot see; 2 rays). Needs "
                    "lit_medium_depth >= 0.")
+            .field(&BakeSettings::texel_mc_rate, "texel_mc_rate", 0.001, 1, "", kInvalidatesBake,
+                   "Impulse: the fraction of a texel's paths that run its Monte Carlo terms "
+                   "through the real media (single_correction, hidden_surface_light, the "
+                   "texel_multiple walk), weighted by 1 / rate (Russian roulette: unbiased, "
+                   "noisier). They are small corrections of smooth light, and cost as much as "
+                   "the rest of the path; occluded connections' lit medium always runs.")
+            .field(&BakeSettings::texel_mc_radius, "texel_mc_radius", 0, 8, "texels",
+                   kInvalidatesBake,
+                   "Impulse: the texel's Monte Carlo terms (see texel_mc_rate) are the mean of "
+                   "those of the texels within this many of it on its own surface (same chart "
+                   "plane, valid): (2r+1)^2 times the samples for the bias of a box blur of a "
+                   "smooth field; 0 keeps each texel's own estimate (unbiased).")
             .field(&BakeSettings::texel_density, "texel_density", 0.01, 4096, "texels/unit",
                    kInvalidatesBake, "Lightmap resolution: texels per scene unit.")
             .field(&BakeSettings::max_size, "max_size", 16, 8192, "texels", kInvalidatesBake,

@@ -267,33 +267,38 @@ const ImpulseIrradiance* BakeEstimator::irradiance_table(double g, double albedo
 }
 
 IrradianceParts BakeEstimator::estimate(const vec3& p, const vec3& n, const vec3& albedo,
-                                        CounterRng& rng, BakeCounters& counters,
-                                        FixedDirect* fixed) const {
+                                        CounterRng& rng, BakeCounters& counters, FixedDirect* fixed,
+                                        IrradianceParts* deferred) const {
     const bool reuse = fixed && settings_.tracking == Tracking::Exact;
+    IrradianceParts later;
     IrradianceParts parts =
         method_ == BakeMethod::Vpt
             ? volume_path(p, n, rng, counters)
-            : surface_path(p, n, albedo, 0, rng, counters, reuse ? fixed : nullptr);
-    if (!finite(parts.surface) || !finite(parts.single) || !finite(parts.multiple)) {
+            : surface_path(p, n, albedo, 0, rng, counters, reuse ? fixed : nullptr,
+                           deferred ? &later : nullptr);
+    if (!finite(parts.total()) || !finite(later.total())) {
         ++counters.guarded;
         return {};
     }
+    if (deferred) *deferred += later;
     return parts;
 }
 
 bool BakeEstimator::direct_light(const EmitterSample& s, const vec3& p, const vec3& n,
                                  float albedo_lum, CounterRng& rng, BakeCounters& counters,
-                                 IrradianceParts& parts, vec3* occluded_multiple,
+                                 IrradianceParts& parts, OccludedConnection* occluded,
                                  bool no_multiple) const {
     const float cos_x = glm::dot(n, s.dir);
+    const bool above = !s.behind && cos_x > 0.0f;
     // Below the horizon the segment to the emitter enters the receiver's own surface at once:
     // no ray is cast, and like an occluded one the connection brings no direct light; the
     // light scattered by the lit medium around the receiver is lit_medium_single's.
-    if (s.behind || cos_x <= 0.0f || !visible(p, n, s.dir, s.distance, counters)) {
+    if (!above || !visible(p, n, s.dir, s.distance, counters)) {
+        if (!scatters_ || !occluded) return false;
+        occluded->occluded = true;
         // Behind an area light the tables have no response (they are of its front).
-        if (scatters_ && occluded_multiple && !no_multiple && !s.behind &&
-            settings_.media_bounces > 2)
-            *occluded_multiple = unoccluded_higher_orders(s, p, n, albedo_lum, rng, counters);
+        if (!no_multiple && !s.behind && settings_.media_bounces > 2)
+            occluded->multiple = unoccluded_higher_orders(s, p, n, albedo_lum, rng, counters);
         return false;
     }
     SegmentOptics optics;
@@ -714,7 +719,7 @@ vec3 BakeEstimator::local_single_correction(const EmitterSample& s, const vec3& 
 
 IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const vec3& albedo,
                                             int depth, CounterRng& rng, BakeCounters& counters,
-                                            FixedDirect* fixed) const {
+                                            FixedDirect* fixed, IrradianceParts* deferred) const {
     IrradianceParts parts;
     const float albedo_lum = luminance(albedo);
     // One buffer per path depth and thread: no allocation per vertex.
@@ -737,16 +742,16 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     const bool walk_here = lit_here && texel_walk();
     for (size_t i = 0; i < local.size(); ++i) {
         const EmitterSample& s = local[i];
-        vec3 multiple(0.0f);
-        vec3* want = lit_here ? &multiple : nullptr;
+        OccludedConnection c;
+        OccludedConnection* want = lit_here ? &c : nullptr;
         if (!fixed || !s.fixed) {
             if (!direct_light(s, p, n, albedo_lum, rng, counters, parts, want, walk_here) &&
                 lit_here)
-                occluded[i] = {true, multiple};
+                occluded[i] = c;
         } else if (learn) {
             if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, want, walk_here) &&
                 lit_here)
-                fixed->occluded.emplace_back(s.light, multiple);
+                fixed->occluded.emplace_back(s.light, c);
         }
     }
     if (fixed) {
@@ -755,76 +760,113 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
             fixed->parts = fixed_parts;
         }
         parts += fixed->parts;
-        for (const auto& [light, multiple] : fixed->occluded)
+        for (const auto& [light, c] : fixed->occluded)
             for (size_t i = 0; i < local.size(); ++i)
-                if (local[i].light == light && local[i].fixed) occluded[i] = {true, multiple};
+                if (local[i].light == light && local[i].fixed) occluded[i] = c;
     }
-    for (size_t i = 0; i < occluded.size(); ++i) {
+    // The Monte Carlo terms through the real media (corrections of the tables' single
+    // scattering, the lit medium of connections below the horizon, hidden surfaces' light, the
+    // multiple-scattering walk) run on a fraction of the paths (bake.texel_mc_rate), weighted
+    // up: Russian roulette, decided once per vertex. At the texel they may be deferred: the
+    // baker sums them apart and filters them over neighbouring texels (bake.texel_mc_radius).
+    bool mc_here = lit_here;
+    float mc_weight = 1.0f;
+    if (lit_here && settings_.texel_mc_rate < 1.0f) {
+        mc_here = rng.next_float() < settings_.texel_mc_rate;
+        mc_weight = 1.0f / settings_.texel_mc_rate;
+    }
+    IrradianceParts mc;
+    for (size_t i = 0; i < occluded.size() && mc_here; ++i) {
         if (occluded[i].occluded)
-            add_lit_medium(local[i], p, n, occluded[i].multiple, rng, counters, parts, walk_here);
+            add_lit_medium(local[i], p, n, occluded[i].multiple, rng, counters, mc, walk_here);
         else if (settings_.single_correction && glm::dot(n, local[i].dir) > 0.0f)
-            parts.single += std::isfinite(local[i].distance)
-                                ? local_single_correction(local[i], p, n, rng, counters)
-                                : single_correction(local[i], p, n, rng, counters);
+            mc.single += std::isfinite(local[i].distance)
+                             ? local_single_correction(local[i], p, n, rng, counters)
+                             : single_correction(local[i], p, n, rng, counters);
     }
     buffers[size_t(depth)] = std::move(local);
-    if (lit_here && settings_.hidden_surface_light && depth == 0 && settings_.bounces > 0) {
+    if (mc_here && settings_.hidden_surface_light && depth == 0 && settings_.bounces > 0) {
         const ScatteredSurfaceLight hidden = surface_light_scattered(p, n, rng, counters);
-        parts.single += hidden.single;
-        parts.multiple += hidden.multiple;
+        mc.single += hidden.single;
+        mc.multiple += hidden.multiple;
     }
-    if (walk_here) {
+    if (walk_here && mc_here) {
         // Orders 2+ through the real media (texel_multiple = walk): VPT's walk from the
         // receiver, NEE from its second scattering event on, ending at the first surface.
         const vec3 ld = sample_cosine_hemisphere(rng.next_float(), rng.next_float());
         if (ld.z > 1e-6f)
-            parts.multiple +=
+            mc.multiple +=
                 walk(origin(p, n), Frame(n).to_world(ld), vec3(kPi), rng, counters, true).multiple;
     }
-    if (depth >= settings_.bounces) return parts;
+    if (depth < settings_.bounces)
+        indirect_segment(p, n, albedo_lum, depth, rng, counters, parts,
+                         mc_here && settings_.single_correction ? &mc.single : nullptr, deferred);
+    if (mc_here) {
+        mc.surface *= mc_weight;
+        mc.single *= mc_weight;
+        mc.multiple *= mc_weight;
+        (deferred ? *deferred : parts) += mc;
+    }
+    return parts;
+}
+
+void BakeEstimator::indirect_segment(const vec3& p, const vec3& n, float albedo_lum, int depth,
+                                     CounterRng& rng, BakeCounters& counters,
+                                     IrradianceParts& parts, vec3* correction,
+                                     IrradianceParts* deferred) const {
     // One indirect segment, cosine-sampled: irradiance = pi x radiance on average.
     const float u1 = rng.next_float(), u2 = rng.next_float();
     const vec3 local_dir = sample_cosine_hemisphere(u1, u2);
-    if (local_dir.z <= 1e-6f) return parts;
+    if (local_dir.z <= 1e-6f) return;
     const vec3 dir = Frame(n).to_world(local_dir);
     ++counters.rays;
     const SurfaceHit hit = scene_.intersect(Ray{origin(p, n), dir, 0.0f, INFINITY});
-    if (!hit.valid) return parts;  // environment light arrives by NEE only
+    if (!hit.valid) return;  // environment light arrives by NEE only
     const Material& material = scene_.scene().materials[size_t(hit.material)];
-    if (material.type == BrdfType::Mirror) return parts;
+    if (material.type == BrdfType::Mirror) return;
     const vec3 albedo_y = material.albedo.eval(hit.uv);
-    if (glm::all(glm::equal(albedo_y, vec3(0.0f)))) return parts;
+    if (glm::all(glm::equal(albedo_y, vec3(0.0f)))) return;
+    // y's deferred Monte Carlo terms travel to p apart from the rest (the response to y's
+    // light is linear in it), so that the baker filters them too.
+    IrradianceParts sub_deferred;
     const IrradianceParts sub =
-        surface_path(hit.position, hit.shading_normal, albedo_y, depth + 1, rng, counters);
+        surface_path(hit.position, hit.shading_normal, albedo_y, depth + 1, rng, counters, nullptr,
+                     deferred ? &sub_deferred : nullptr);
     const vec3 radiance = albedo_y * kInvPi * sub.total();  // L(y -> p), diffuse
+    const vec3 radiance_deferred = albedo_y * kInvPi * sub_deferred.total();
     // A vertex that gathered nothing (its emitters hidden, its own path lost) sends nothing to
     // attenuate or scatter: no tracking, no table lookup.
-    if (glm::all(glm::equal(radiance, vec3(0.0f)))) return parts;
+    const bool any_deferred = !glm::all(glm::equal(radiance_deferred, vec3(0.0f)));
+    if (glm::all(glm::equal(radiance, vec3(0.0f))) && !any_deferred) return;
     SegmentOptics optics;
     if (attenuates_) optics = segment_optics(p, dir, hit.distance, rng);
     parts.surface += kPi * radiance * optics.transmittance_float();
+    if (any_deferred) deferred->surface += kPi * radiance_deferred * optics.transmittance_float();
     if (scatters_) {
         // y as a differential-area emitter of intensity L dA cos_y max(n_y . u, 0) / cos_y: with
         // dA = d^2 domega / cos_y and domega = 1 / pdf, I0 = L d^2 / (cos_y pdf).
         const float cos_y = std::max(1e-3f, std::abs(glm::dot(hit.shading_normal, dir)));
         const float pdf = local_dir.z * kInvPi;
         const double d = hit.distance;
-        const vec3 intensity = radiance * float(d * d / (double(cos_y) * pdf));
-        add_scattered(EmitterKind::Area, intensity, dir, d,
-                      std::sqrt(std::max(0.0f, 1.0f - cos_y * cos_y)), hit.shading_normal, optics,
-                      n, albedo_lum, parts, counters);
-        if (lit_here && settings_.single_correction) {
+        const float to_intensity = float(d * d / (double(cos_y) * pdf));
+        const vec3 intensity = radiance * to_intensity;
+        const double shift = std::sqrt(std::max(0.0f, 1.0f - cos_y * cos_y));
+        add_scattered(EmitterKind::Area, intensity, dir, d, shift, hit.shading_normal, optics, n,
+                      albedo_lum, parts, counters);
+        if (any_deferred)
+            add_scattered(EmitterKind::Area, radiance_deferred * to_intensity, dir, d, shift,
+                          hit.shading_normal, optics, n, albedo_lum, *deferred, counters);
+        if (correction) {
             // y's light scattered once on the way is the area tables' infinite medium too.
             EmitterSample y;
             y.kind = EmitterKind::Area;
             y.dir = dir;
             y.distance = d;
-            y.intensity = intensity;
+            y.intensity = intensity + radiance_deferred * to_intensity;
             y.emitter_normal = hit.shading_normal;
-            parts.single += local_single_correction(y, p, n, rng, counters);
+            *correction += local_single_correction(y, p, n, rng, counters);
         }
     }
-    return parts;
 }
 
 vec3 BakeEstimator::point_lights_along(const vec3& o, const vec3& d, double t_max, CounterRng& rng,

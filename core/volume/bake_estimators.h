@@ -74,21 +74,31 @@ class BakeEstimator {
     // `tables` is needed by Impulse only (may be null otherwise).
     BakeEstimator(const RayScene& scene, const Media& media, const ImpulseTables* tables,
                   BakeMethod method, const BakeSettings& settings);
+    // An emitter connection that brings no direct light (occluded, or below the horizon).
+    struct OccludedConnection {
+        bool occluded = false;
+        vec3 multiple{0.0f};  // the unoccluded response's orders 3 and up (for add_lit_medium)
+    };
     // The part of a texel's paths that is the same for every one of them: the direct light of
     // point and directional lights at the texel itself (no random number decides it), computed
     // on the first path and added to the others (not with ratio tracking, which draws).
     struct FixedDirect {
         bool known = false;
         IrradianceParts parts;
-        // Impulse: the point and directional lights whose connection is occluded, with the
-        // orders 3+ of their unoccluded response; their lit-medium estimate
-        // (lit_medium_single) draws random numbers, so it runs on every path.
-        std::vector<std::pair<int, vec3>> occluded;
+        // Impulse: the point and directional lights whose connection is occluded, and how;
+        // their Monte Carlo terms draw random numbers, so they run on every path.
+        std::vector<std::pair<int, OccludedConnection>> occluded;
     };
     // Irradiance at p (normal n, albedo of the receiver for back-scatter): one path. `fixed`,
-    // when given, is this point's FixedDirect, filled by the first call.
+    // when given, is this point's FixedDirect, filled by the first call. `deferred`, when
+    // given, receives the texel's Monte Carlo terms through the real media instead of the
+    // result (the baker filters them over neighbouring texels; without it they are added).
     IrradianceParts estimate(const vec3& p, const vec3& n, const vec3& albedo, CounterRng& rng,
-                             BakeCounters& counters, FixedDirect* fixed = nullptr) const;
+                             BakeCounters& counters, FixedDirect* fixed = nullptr,
+                             IrradianceParts* deferred = nullptr) const;
+
+    BakeMethod method() const { return method_; }
+    const BakeSettings& settings() const { return settings_; }
 
     // Incident radiance at a probe p as order-3 SH (9 RGB coefficients per part): one path.
     struct ProbeParts {
@@ -163,10 +173,6 @@ class BakeEstimator {
     SecondScatter second_scatter(const EmitterSample& s, const vec3& emitter, const vec3& x,
                                  const vec3& w, const HomogeneousMedium& here, CounterRng& rng,
                                  BakeCounters& counters) const;
-    struct OccludedConnection {
-        bool occluded = false;
-        vec3 multiple{0.0f};  // the unoccluded response's orders 3 and up
-    };
     // A distant emitter's unoccluded connection: the lit medium's single scattering through
     // the real media and geometry minus the tables' model of it (a control variate: the
     // tables' value plus this is unbiased for single scattering, up to the tables' ZH error).
@@ -212,14 +218,21 @@ class BakeEstimator {
     void sample_emitters(const vec3& p, CounterRng& rng, std::vector<EmitterSample>& out) const;
     IrradianceParts surface_path(const vec3& p, const vec3& n, const vec3& albedo, int depth,
                                  CounterRng& rng, BakeCounters& counters,
-                                 FixedDirect* fixed = nullptr) const;
+                                 FixedDirect* fixed = nullptr,
+                                 IrradianceParts* deferred = nullptr) const;
+    // The path's segment from (p, n) to the next surface vertex and that vertex's light, into
+    // parts; correction (when given) gets the segment's single-scattering correction; the
+    // next vertex's deferred terms, carried to p, go to *deferred (when given).
+    void indirect_segment(const vec3& p, const vec3& n, float albedo_lum, int depth,
+                          CounterRng& rng, BakeCounters& counters, IrradianceParts& parts,
+                          vec3* correction, IrradianceParts* deferred) const;
     // Direct light of one emitter sample at (p, n): visibility, transmittance and, for impulse,
     // its scattered response, added to parts.
     // Returns false when the connection is occluded or below the horizon; then, for impulse,
-    // *occluded_multiple (when given) is the unoccluded response's orders 3 and up.
+    // *occluded (when given) is marked, with the unoccluded response's orders 3 and up.
     bool direct_light(const EmitterSample& s, const vec3& p, const vec3& n, float albedo_lum,
                       CounterRng& rng, BakeCounters& counters, IrradianceParts& parts,
-                      vec3* occluded_multiple = nullptr, bool no_multiple = false) const;
+                      OccludedConnection* occluded = nullptr, bool no_multiple = false) const;
     // The lit-medium estimate of an occluded connection, added to parts: its single
     // scattering and order 2 (lit_medium_single), and the unoccluded orders 3 and up.
     void add_lit_medium(const EmitterSample& s, const vec3& p, const vec3& n,

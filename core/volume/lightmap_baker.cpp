@@ -2,10 +2,12 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 
 #include "base/error.h"
 #include "base/stopwatch.h"
+#include "volume/texel_filter.h"
 
 namespace freqlab {
 
@@ -61,6 +63,7 @@ LightmapBaker::LightmapBaker(const RayScene& scene, const Media& media, const Im
 void LightmapBaker::reset() {
     sums_.assign(maps_.size(), {});
     for (size_t i = 0; i < maps_.size(); ++i) sums_[i].assign(maps_[i].texels.size(), {});
+    deferred_sums_ = sums_;
     fixed_.assign(maps_.size(), {});  // media may have changed: computed afresh
     for (size_t i = 0; i < maps_.size(); ++i) fixed_[i].assign(maps_[i].texels.size(), {});
     probe_sums_.assign(probe_positions_.size(), {});
@@ -90,8 +93,9 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
                 // same order whatever the split into passes.
                 for (int s = first; s < first + samples; ++s) {
                     CounterRng rng = texel_random(settings_.seed, mi, i, s);
-                    sums_[mi][i] += estimator_.estimate(t.position, t.normal, t.albedo, rng,
-                                                        counters, &fixed_[mi][i]);
+                    sums_[mi][i] +=
+                        estimator_.estimate(t.position, t.normal, t.albedo, rng, counters,
+                                            &fixed_[mi][i], &deferred_sums_[mi][i]);
                 }
             }
             rays += counters.rays;
@@ -185,12 +189,38 @@ nlohmann::json LightmapBaker::probes_json() const {
 IrradianceParts texel_estimate(const BakeEstimator& estimator,
                                const std::vector<ObjectLightmap>& maps, size_t lightmap,
                                size_t texel, int seed, int spp) {
-    const LightmapTexel& t = maps.at(lightmap).texels.at(texel);
-    IrradianceParts sum;
+    const ObjectLightmap& map = maps.at(lightmap);
+    const size_t n = map.texels.size();
+    const int radius = texel_filter_radius(estimator);
+    // The texel and the window the baker's filter reads, re-run with the bake's keys.
+    std::vector<IrradianceParts> sums(n), deferred(n);
+    TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
+    const int x0 = int(texel % size_t(map.width)), y0 = int(texel / size_t(map.width));
     BakeCounters counters;
-    for (int s = 0; s < spp; ++s) {
-        CounterRng rng = texel_random(seed, lightmap, texel, s);
-        sum += estimator.estimate(t.position, t.normal, t.albedo, rng, counters);
+    for (int y = std::max(0, y0 - radius); y <= std::min(map.height - 1, y0 + radius); ++y)
+        for (int x = std::max(0, x0 - radius); x <= std::min(map.width - 1, x0 + radius); ++x) {
+            const size_t j = size_t(y) * size_t(map.width) + size_t(x);
+            const LightmapTexel& t = map.texels.at(j);
+            if (t.state != TexelState::Valid && j != texel) continue;
+            BakeEstimator::FixedDirect fixed;
+            for (int s = 0; s < spp; ++s) {
+                CounterRng rng = texel_random(seed, lightmap, j, s);
+                sums[j] += estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
+                                              &deferred[j]);
+            }
+            set_texel_filter_guide(guide, j, fixed, sums[j]);
+        }
+    IrradianceParts sum = sums[texel];
+    const std::vector<size_t> near = texel_filter_neighbours(map, guide, texel, radius);
+    if (radius <= 0 || map.texels[texel].state != TexelState::Valid) {
+        sum += deferred[texel];
+    } else if (!near.empty()) {
+        IrradianceParts d;
+        for (size_t j : near) d += deferred[j];
+        const float inv = 1.0f / float(near.size());
+        sum.surface += d.surface * inv;
+        sum.single += d.single * inv;
+        sum.multiple += d.multiple * inv;
     }
     const float inv = spp > 0 ? 1.0f / float(spp) : 0.0f;
     sum.surface *= inv;
@@ -206,10 +236,15 @@ LayerSet LightmapBaker::layers(size_t mi) const {
     const float inv = samples_ > 0 ? 1.0f / float(samples_) : 0.0f;
     // Outgoing radiance of each part, and irradiance; dilated together.
     std::vector<float> values(n * 15, 0.0f);
+    TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
+    for (size_t i = 0; i < n; ++i) set_texel_filter_guide(guide, i, fixed_[mi][i], sums_[mi][i]);
+    const std::vector<IrradianceParts> deferred =
+        filter_texel_sums(map, deferred_sums_[mi], guide, texel_filter_radius(estimator_));
     for (size_t i = 0; i < n; ++i) {
         const LightmapTexel& t = map.texels[i];
         if (t.state != TexelState::Valid) continue;
-        const IrradianceParts& p = sums_[mi][i];
+        IrradianceParts p = sums_[mi][i];
+        p += deferred[i];
         const vec3 e = p.total() * inv;
         const vec3 k = t.albedo * kInvPi * inv;
         const vec3 out[5] = {k * p.total(), e, p.surface * inv, p.single * inv, p.multiple * inv};

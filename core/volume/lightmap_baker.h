@@ -65,6 +65,9 @@ class LightmapBaker {
     std::vector<ObjectLightmap> maps_;
     // Per lightmap, per texel: surface, single, multiple (RGB each) summed over samples.
     std::vector<std::vector<IrradianceParts>> sums_;
+    // The same for the texels' deferred Monte Carlo terms (impulse), filtered over
+    // neighbouring texels when the layers are made (volume/texel_filter.h).
+    std::vector<std::vector<IrradianceParts>> deferred_sums_;
     // Per lightmap, per texel: its paths' shared direct light (BakeEstimator::FixedDirect).
     std::vector<std::vector<BakeEstimator::FixedDirect>> fixed_;
     std::vector<vec3> probe_positions_;
@@ -82,7 +85,8 @@ inline CounterRng texel_random(int seed, size_t lightmap, size_t texel, int samp
 
 // The mean of paths 0 .. spp-1 of `estimator` at texel `texel` of lightmap `lightmap` (of `maps`)
 // under the bake's keys: what a bake with that estimator and seed stores there (up to the order
-// of the additions). --debug-texel prints it for every method.
+// of the additions), impulse's deferred terms filtered over the same neighbours (re-run here).
+// --debug-texel prints it for every method.
 IrradianceParts texel_estimate(const BakeEstimator& estimator,
                                const std::vector<ObjectLightmap>& maps, size_t lightmap,
                                size_t texel, int seed, int spp);

@@ -1,0 +1,48 @@
+// The filter of a lightmap's deferred Monte Carlo terms (issue "Method B, part 3"): impulse's
+// corrections through the real media at a texel (single scattering the tables' model misses,
+// the lit medium below the horizon, hidden surfaces' light, the multiple-scattering walk) are
+// smooth over the surface, but at bake.texel_mc_rate of the paths their per-texel estimate is
+// noisy. Each texel takes the mean of the texels within `radius` of it in the atlas that lie
+// on its own surface (valid, normals within ~25 degrees, world distance within the window's, so
+// that a neighbouring chart across a gutter never mixes in) and on the same side of every
+// point or directional light's shadow: those terms jump there (the lit medium of an occluded
+// connection stands in for the tables' response plus a correction), their sum with the
+// unfiltered tables' part does not. Last, the texels' unfiltered light (direct and tables,
+// summed at every path) must agree within kTexelFilterLightRatio: a texel in a crack under a
+// box sees little of the medium that lights its open neighbours. radius 0 keeps every texel's own
+// estimate (unbiased per texel); a radius trades that for (2 radius + 1)^2 times the samples,
+// with the bias of a box blur of a smooth field.
+//
+// | parameter | meaning                                                    |
+// |-----------|------------------------------------------------------------|
+// | radius    | half-width of the window, texels (bake.texel_mc_radius)    |
+#pragma once
+
+#include <vector>
+
+#include "volume/bake_estimators.h"
+#include "volume/lightmap_atlas.h"
+
+namespace freqlab {
+
+constexpr float kTexelFilterLightRatio = 1.5f;
+
+// What the filter compares texels by, one entry per texel.
+struct TexelFilterGuide {
+    std::vector<uint64_t> shadows;  // a bit per point / directional light the texel sees occluded
+    std::vector<float> light;       // luminance of the texel's unfiltered sum
+};
+// Texel i's entry: its occluded fixed lights and the luminance of its unfiltered sum.
+void set_texel_filter_guide(TexelFilterGuide& guide, size_t i,
+                            const BakeEstimator::FixedDirect& fixed, const IrradianceParts& sum);
+// The radius the baker filters `estimator`'s deferred terms with (0 unless impulse).
+int texel_filter_radius(const BakeEstimator& estimator);
+// The filtered sums, one per texel (invalid texels: zero). sums.size() == map.texels.size().
+std::vector<IrradianceParts> filter_texel_sums(const ObjectLightmap& map,
+                                               const std::vector<IrradianceParts>& sums,
+                                               const TexelFilterGuide& guide, int radius);
+// The texels filter_texel_sums averages for texel i (i itself among them).
+std::vector<size_t> texel_filter_neighbours(const ObjectLightmap& map,
+                                            const TexelFilterGuide& guide, size_t i, int radius);
+
+}  // namespace freqlab
