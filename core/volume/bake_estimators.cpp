@@ -613,13 +613,10 @@ vec3 BakeEstimator::area_response_rescattered(const vec3& intensity, const vec3&
         single[k] = r.single[size_t(k)] * gl;
         multiple[k] = r.multiple[size_t(k)] * gl;
     }
-    // Orders 3+ (the response's multiple term) at half weight: the infinite medium's isotropic
-    // multiple lobe about y (power-equivalent point, impulse_query.h) sends half its light into
-    // the half-space behind y's surface, where the medium is not. Measured on haze_occluder's
-    // open floor, surface-reflected multiple scattering over VPT's: 1.37 at full weight, 0.59
-    // without, 0.98 at half.
-    const double radiance = zh_eval(kImpulseOrder, single, glm::dot(axis, wd)) +
-                            0.5 * zh_eval(kImpulseOrder, multiple, glm::dot(ld, wd));
+    // Orders 3+ (the response's multiple term) at kSurfaceEmitterMultipleWeight.
+    const double radiance =
+        zh_eval(kImpulseOrder, single, glm::dot(axis, wd)) +
+        kSurfaceEmitterMultipleWeight * zh_eval(kImpulseOrder, multiple, glm::dot(ld, wd));
     return intensity * float(std::max(0.0, radiance));
 }
 
@@ -851,11 +848,20 @@ void BakeEstimator::indirect_segment(const vec3& p, const vec3& n, float albedo_
         const float to_intensity = float(d * d / (double(cos_y) * pdf));
         const vec3 intensity = radiance * to_intensity;
         const double shift = std::sqrt(std::max(0.0f, 1.0f - cos_y * cos_y));
+        // The infinite medium's multiple response counts the medium behind y's surface, where
+        // there is none: kSurfaceEmitterMultipleWeight of it (area_response_rescattered).
+        IrradianceParts response;
         add_scattered(EmitterKind::Area, intensity, dir, d, shift, hit.shading_normal, optics, n,
-                      albedo_lum, parts, counters);
-        if (any_deferred)
+                      albedo_lum, response, counters);
+        response.multiple *= kSurfaceEmitterMultipleWeight;
+        parts += response;
+        if (any_deferred) {
+            response = {};
             add_scattered(EmitterKind::Area, radiance_deferred * to_intensity, dir, d, shift,
-                          hit.shading_normal, optics, n, albedo_lum, *deferred, counters);
+                          hit.shading_normal, optics, n, albedo_lum, response, counters);
+            response.multiple *= kSurfaceEmitterMultipleWeight;
+            *deferred += response;
+        }
         if (correction) {
             // y's light scattered once on the way is the area tables' infinite medium too.
             EmitterSample y;

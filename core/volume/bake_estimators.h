@@ -52,6 +52,15 @@ const std::vector<BakeMethod>& bake_methods();
 std::string bake_method_list(const std::string& separator = "|");
 bool is_bake_method(const std::string& name);
 
+// A surface vertex as an emitter of the tables (a differential area): the infinite medium's
+// isotropic multiple lobe about it (power-equivalent point, impulse_query.h) sends half its
+// light into the half-space behind the surface, where the medium is not, so its multiple
+// response counts at half weight. Measured: haze_occluder's open floor, surface-reflected
+// multiple scattering over VPT's 1.37 at full weight, 0.59 without, 0.98 at half; cornell_fog's
+// lightmaps, multiple over VPT's 1.15-1.33 at full weight, 0.84-1.00 at half (smoke_room
+// 0.91-0.99 -> 0.80-0.89, sun_haze 1.04-1.17 -> 0.94-1.02).
+constexpr float kSurfaceEmitterMultipleWeight = 0.5f;
+
 struct IrradianceParts {
     vec3 surface{0.0f}, single{0.0f}, multiple{0.0f};
     vec3 total() const { return surface + single + multiple; }

@@ -44,8 +44,10 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
                                                         BakeCounters& counters) const {
     ProbeParts out;
     const vec3 no_offset(0.0f);
+    // multiple_weight: kSurfaceEmitterMultipleWeight for a surface vertex as the emitter.
     auto scattered = [&](EmitterKind kind, const vec3& intensity, const vec3& dir, double distance,
-                         double shift, const vec3& emitter_normal, const SegmentOptics& optics) {
+                         double shift, const vec3& emitter_normal, const SegmentOptics& optics,
+                         float multiple_weight = 1.0f) {
         const HomogeneousMedium m = optics.effective();
         if (!(m.sigma_s > 0.0) || !std::isfinite(distance) || !(distance > 0.0) ||
             m.sigma_t() * distance > ZhDistanceTable::kMaxD)
@@ -65,7 +67,7 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
                                         ? tilted_axis(l, emitter_normal, table->tilt(D, shift))
                                         : l;
             add_lobe(out.single, intensity * scale, lobes.single, axis);
-            add_lobe(out.multiple, intensity * scale, lobes.multiple, l);
+            add_lobe(out.multiple, intensity * (scale * multiple_weight), lobes.multiple, l);
             return;
         }
         ImpulseQuery q;
@@ -81,7 +83,7 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
         const glm::dvec3 axis =
             kind == EmitterKind::Area ? tilted_axis(l, emitter_normal, r.axis_tilt) : l;
         add_lobe(out.single, intensity, r.single.data(), axis);
-        add_lobe(out.multiple, intensity, r.multiple.data(), l);
+        add_lobe(out.multiple, intensity * multiple_weight, r.multiple.data(), l);
     };
 
     std::vector<EmitterSample> emitters;
@@ -128,7 +130,8 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
         const float cos_y = std::max(1e-3f, std::abs(glm::dot(hit.shading_normal, dir)));
         const double d = hit.distance;
         scattered(EmitterKind::Area, radiance * float(d * d * kFourPi / cos_y), dir, d,
-                  std::sqrt(std::max(0.0f, 1.0f - cos_y * cos_y)), hit.shading_normal, optics);
+                  std::sqrt(std::max(0.0f, 1.0f - cos_y * cos_y)), hit.shading_normal, optics,
+                  kSurfaceEmitterMultipleWeight);
     }
     return out;
 }
@@ -268,6 +271,14 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
         line("multiple scattering of every emitter by the texel's walk (%d draws): %.5g +- %.2g",
              kDraws, mean, std::sqrt(std::max(0.0, sum2 / kDraws - mean * mean) / kDraws));
     }
+    if (scatters_ && settings_.lit_medium_depth >= 0)
+        line(
+            "in the bake these Monte Carlo terms (corrections, lit medium, hidden surfaces' "
+            "light, walk) run on %.3g of the paths, weighted by %.3g, and are averaged over "
+            "the texels within %d of this one on its surface, shadow side and light level "
+            "(bake.texel_mc_rate, bake.texel_mc_radius)",
+            double(settings_.texel_mc_rate), 1.0 / double(settings_.texel_mc_rate),
+            settings_.texel_mc_radius);
     return lines;
 }
 
