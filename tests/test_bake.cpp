@@ -530,3 +530,13 @@ TEST(Bake, TexelFilterAveragesOnlyTheTexelsOwnSurfaceAndShadowSide) {
         }
     }
 }
+
+// The method names joined by any separator, NULs included: the workbench's bake-method combo is
+// a NUL-separated list (it showed nothing when the list was cut at the first NUL).
+TEST(Bake, MethodListKeepsEverySeparator) {
+    EXPECT_EQ(bake_method_list(), "surface|extinction|impulse|vpt");
+    const std::string combo = bake_method_list(std::string(1, '\0'));
+    EXPECT_EQ(combo, std::string("surface\0extinction\0impulse\0vpt", 30));
+    EXPECT_EQ(parse_bake_method("vpt"), BakeMethod::Vpt);
+    EXPECT_THROW(parse_bake_method("walk"), Error);
+}

@@ -30,8 +30,9 @@ std::vector<const char*> enum_names(const EnumName<E> (&table)[N]) {
     return names;
 }
 
+// `separator` may hold NULs (ImGui's combo lists): a std::string, not a C string.
 template <class E, std::size_t N>
-std::string enum_name_list(const EnumName<E> (&table)[N], const char* separator = ", ") {
+std::string enum_name_list(const EnumName<E> (&table)[N], const std::string& separator = ", ") {
     std::string list;
     for (const EnumName<E>& e : table)
         list += (list.empty() ? "" : separator) + std::string(e.name);

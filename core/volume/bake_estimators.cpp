@@ -42,7 +42,7 @@ const std::vector<BakeMethod>& bake_methods() {
 }
 
 std::string bake_method_list(const std::string& separator) {
-    return enum_name_list(kBakeMethodNames, separator.c_str());
+    return enum_name_list(kBakeMethodNames, separator);
 }
 
 bool is_bake_method(const std::string& name) {
