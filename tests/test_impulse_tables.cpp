@@ -71,3 +71,16 @@ TEST(ImpulseTables, SaveLoadRoundTripAndDamage) {
         EXPECT_EQ(e.field(), "header");
     }
 }
+
+// The check `freqlab tables` runs on every file it writes (ImpulseTables::verify): point and
+// directional single scattering against direct quadrature, within 0.5 % per ZH coefficient.
+TEST(ImpulseTables, VerifyAgainstDirectQuadrature) {
+    const ImpulseTables& tables = test_support::shared_impulse_tables();
+    const ImpulseTables::Verification v = tables.verify();
+    std::printf("verify: point %.2e, directional %.2e over %d queries\n", v.worst_point,
+                v.worst_directional, v.queries);
+    EXPECT_EQ(v.queries, 54);
+    EXPECT_LT(v.worst_point, ImpulseTables::kVerifyTolerance);
+    EXPECT_LT(v.worst_directional, ImpulseTables::kVerifyTolerance);
+    EXPECT_GT(v.worst(), 0.0) << "a table equal to the quadrature to the last bit is suspicious";
+}

@@ -1,5 +1,7 @@
 #include "volume/impulse_tables.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -217,6 +219,30 @@ ImpulseTables ImpulseTables::cached(int bounces, std::string* path_used) {
     } catch (const std::exception&) {
     }
     return t;
+}
+
+ImpulseTables::Verification ImpulseTables::verify() const {
+    Verification v;
+    auto worst = [](const ZhVector& q, const ZhVector& ref) {
+        double w = 0.0;
+        for (int l = 0; l < kImpulseOrder; ++l)
+            if (std::fabs(ref[size_t(l)]) > 1e-3 * std::fabs(ref[0]))
+                w = std::max(w,
+                             std::fabs(q[size_t(l)] - ref[size_t(l)]) / std::fabs(ref[size_t(l)]));
+        return w;
+    };
+    for (double sigma_s : {0.2, 1.0, 4.0})
+        for (double g : {-0.4, 0.0, 0.3})
+            for (double d : {0.1, 0.7, 2.0}) {
+                const HomogeneousMedium m{sigma_s, 0.1, g};
+                v.worst_point = std::max(v.worst_point,
+                                         worst(point_single().single(m, d), point_single_zh(m, d)));
+                v.worst_directional =
+                    std::max(v.worst_directional,
+                             worst(directional_single().single(m, d), directional_single_zh(m, d)));
+                v.queries += 2;
+            }
+    return v;
 }
 
 }  // namespace freqlab

@@ -51,6 +51,18 @@ class ImpulseTables {
     }
     int bounces() const { return point_multiple_->bounces(); }
 
+    // Queries against direct computation (deterministic quadrature, impulse_response.h) over a
+    // spread of media and distances: point and directional single scattering, every ZH
+    // coefficient above 1e-3 of the DC term. `freqlab tables` refuses a file beyond
+    // kVerifyTolerance.
+    struct Verification {
+        double worst_point = 0.0, worst_directional = 0.0;  // relative, per coefficient
+        int queries = 0;
+        double worst() const { return std::max(worst_point, worst_directional); }
+    };
+    static constexpr double kVerifyTolerance = 0.005;
+    Verification verify() const;
+
   private:
     std::shared_ptr<SingleScatterTable> point_single_, directional_single_;
     std::shared_ptr<AreaSingleScatterTable> area_single_;
