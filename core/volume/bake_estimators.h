@@ -15,6 +15,12 @@
 // |            | point lights in media by equiangular sampling along every segment, HG phase |
 // |            | sampling, Russian roulette after 4 scattering events                        |
 //
+// Impulse at the texel (issue "Method B, part 3"): the tables give what they describe well on
+// every path; the Monte Carlo terms through the real media (single-scattering corrections, the
+// lit medium of occluded connections, hidden surfaces' light, the multiple-scattering walk) run
+// on bake.texel_mc_rate of the paths, weighted up, and are returned apart (`deferred`) for the
+// baker to filter over neighbouring texels (texel_filter.h).
+//
 // Parts: `surface` is light that reached x along a final segment without scattering in it;
 // `single` / `multiple` had one / several scattering events between x and the previous surface
 // vertex (or emitter). Environment and sky light is reached by NEE only (escaping rays add
