@@ -211,17 +211,10 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
             set_texel_filter_guide(guide, j, fixed, sums[j]);
         }
     IrradianceParts sum = sums[texel];
-    const std::vector<size_t> near = texel_filter_neighbours(map, guide, texel, radius);
-    if (radius <= 0 || map.texels[texel].state != TexelState::Valid) {
+    if (radius <= 0 || map.texels[texel].state != TexelState::Valid)
         sum += deferred[texel];
-    } else if (!near.empty()) {
-        IrradianceParts d;
-        for (size_t j : near) d += deferred[j];
-        const float inv = 1.0f / float(near.size());
-        sum.surface += d.surface * inv;
-        sum.single += d.single * inv;
-        sum.multiple += d.multiple * inv;
-    }
+    else
+        sum += mean_of_texels(deferred, texel_filter_neighbours(map, guide, texel, radius));
     const float inv = spp > 0 ? 1.0f / float(spp) : 0.0f;
     sum.surface *= inv;
     sum.single *= inv;

@@ -41,20 +41,25 @@ int texel_filter_radius(const BakeEstimator& estimator) {
     return estimator.method() == BakeMethod::Impulse ? estimator.settings().texel_mc_radius : 0;
 }
 
+IrradianceParts mean_of_texels(const std::vector<IrradianceParts>& sums,
+                               const std::vector<size_t>& near) {
+    IrradianceParts sum;
+    if (near.empty()) return sum;
+    for (size_t j : near) sum += sums[j];
+    const float inv = 1.0f / float(near.size());
+    sum.surface *= inv;
+    sum.single *= inv;
+    sum.multiple *= inv;
+    return sum;
+}
+
 std::vector<IrradianceParts> filter_texel_sums(const ObjectLightmap& map,
                                                const std::vector<IrradianceParts>& sums,
                                                const TexelFilterGuide& guide, int radius) {
     if (radius <= 0) return sums;
     std::vector<IrradianceParts> out(sums.size());
     tbb::parallel_for(size_t(0), sums.size(), [&](size_t i) {
-        const std::vector<size_t> near = texel_filter_neighbours(map, guide, i, radius);
-        if (near.empty()) return;
-        IrradianceParts sum;
-        for (size_t j : near) sum += sums[j];
-        const float inv = 1.0f / float(near.size());
-        out[i].surface = sum.surface * inv;
-        out[i].single = sum.single * inv;
-        out[i].multiple = sum.multiple * inv;
+        out[i] = mean_of_texels(sums, texel_filter_neighbours(map, guide, i, radius));
     });
     return out;
 }

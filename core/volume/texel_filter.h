@@ -41,6 +41,9 @@ int texel_filter_radius(const BakeEstimator& estimator);
 std::vector<IrradianceParts> filter_texel_sums(const ObjectLightmap& map,
                                                const std::vector<IrradianceParts>& sums,
                                                const TexelFilterGuide& guide, int radius);
+// The mean of sums over the texels `near` (zero when none).
+IrradianceParts mean_of_texels(const std::vector<IrradianceParts>& sums,
+                               const std::vector<size_t>& near);
 // The texels filter_texel_sums averages for texel i (i itself among them).
 std::vector<size_t> texel_filter_neighbours(const ObjectLightmap& map,
                                             const TexelFilterGuide& guide, size_t i, int radius);
