@@ -45,8 +45,8 @@ shot bake_shadow_trace.png scenes/analytic/haze_occluder.json --method impulse -
 shot bake_haze_occluder_split.png scenes/analytic/haze_occluder.json --method impulse \
      --set bake.spp=256 --set bake.texel_density=8 --set bake.probes_x=0 --set frame.width=480 \
      --set frame.height=360 --compare --size 1280x900
-# The same bake with its Monte Carlo terms unfiltered (bake.texel_mc_radius=0): 1 path in 32 runs
-# them, so at 256 spp each texel has 8; the default filter averages them over its neighbours.
+# The same bake with its Monte Carlo terms unfiltered (bake.texel_mc_radius=0): 1 path in 50 runs
+# them, so at 256 spp each texel has ~5; the default filter averages them over its neighbours.
 shot bake_mc_unfiltered.png scenes/analytic/haze_occluder.json --method impulse \
      --set bake.spp=256 --set bake.texel_density=8 --set bake.probes_x=0 --set bake.texel_mc_radius=0 \
      --set frame.width=480 --set frame.height=360 --size 1280x800

@@ -33,7 +33,7 @@ struct BakeSettings {
     // Impulse, at the texel: the fraction of paths on which the Monte Carlo terms through the
     // real media run (single-scattering corrections, hidden surfaces' light, the multiple-
     // scattering walk), weighted up by its inverse (Russian roulette: unbiased at any spp).
-    float texel_mc_rate = 0.03125f;
+    float texel_mc_rate = 0.02f;
     // Their per-texel sums filtered over the texels within this many of it (texel_filter.h).
     int texel_mc_radius = 3;
     float texel_density = 16.0f;  // texels per scene unit
