@@ -238,3 +238,27 @@ TEST(LitMedium, HazeOccluderFloorUmbraAgainstVpt) {
     // light of the floor around the umbra scattered back (hidden_surface_light).
     EXPECT_NEAR(u.irradiance_ratio, 1.0, 0.1);
 }
+
+// bake.media_bounces = 1 is single scattering only: no estimate of impulse's may bring light
+// scattered twice (the hidden surfaces' light scattered at a medium point and again on its way
+// from the surface brought some: cornell_fog's lightmaps read a multiple part where VPT's is 0).
+TEST(LitMedium, SingleScatteringOnlyMeansNoMultiple) {
+    Fixture f(occluder_in_haze(
+        R"({"type": "directional", "direction": [-0.25, 0.15, -1], "irradiance": 3.0},
+           {"type": "point", "position": [1.2, -0.8, 1.6], "intensity": 4.0})"));
+    const ImpulseTables& tables = test_support::shared_impulse_tables();
+    BakeSettings s;
+    s.media_bounces = 1;
+    s.texel_mc_rate = 1.0f;
+    const BakeEstimator impulse(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
+    BakeCounters counters;
+    double single = 0.0;
+    for (int i = 0; i < 4000; ++i) {
+        CounterRng rng(5, 1, 0, uint64_t(i));
+        const vec3 p = i % 2 ? vec3(-0.3f, 0.2f, 0.0f) : vec3(1.5f, 1.0f, 0.0f);
+        const IrradianceParts parts = impulse.estimate(p, vec3(0, 0, 1), vec3(0.5f), rng, counters);
+        ASSERT_EQ(parts.multiple, vec3(0.0f)) << "path " << i;
+        single += luminance(parts.single);
+    }
+    EXPECT_GT(single, 0.0);
+}

@@ -578,9 +578,11 @@ BakeEstimator::ScatteredSurfaceLight BakeEstimator::surface_light_scattered(
     const float cos_y = std::max(1e-3f, std::abs(glm::dot(hit.shading_normal, w2)));
     const double d = hit.distance;
     const vec3 intensity = radiance * float(d * d / (double(cos_y) * pdf_w2));
-    out.multiple =
-        float(to_receiver) * area_response_rescattered(intensity, w2, d, hit.shading_normal, optics,
-                                                       m.here.g, m.w, counters);
+    // Scattered at x and again on the way from y: order 2 and up, none under media_bounces 1.
+    if (settings_.media_bounces >= 2)
+        out.multiple = float(to_receiver) * area_response_rescattered(intensity, w2, d,
+                                                                      hit.shading_normal, optics,
+                                                                      m.here.g, m.w, counters);
     return out;
 }
 
@@ -599,7 +601,8 @@ vec3 BakeEstimator::area_response_rescattered(const vec3& intensity, const vec3&
     q.shift = std::clamp(double(std::sqrt(std::max(0.0f, 1.0f - c * c))), 0.0, 1.0);
     q.medium = optics.effective();
     q.medium.g = std::clamp(q.medium.g, -kGRange, kGRange);
-    q.last_bounce = std::min(settings_.media_bounces, table_bounces_);
+    // One scattering event more at x: the response's orders up to media_bounces - 1.
+    q.last_bounce = std::clamp(settings_.media_bounces - 1, 1, table_bounces_);
     q.collapsed = true;
     ++counters.impulse_queries;
     const ImpulseResponse r = query_impulse(*tables_, q);
