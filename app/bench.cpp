@@ -103,9 +103,7 @@ int run_bench(const BenchArgs& a) {
     const Layer& mis_var = mis.layers.get("variance");
     const Layer& mis_rays = mis.layers.get("rays");
     const Layer& depth = ref.layers.get("depth");
-    auto lum = [](const Layer& c, size_t i) {
-        return 0.2126 * c.data[3 * i] + 0.7152 * c.data[3 * i + 1] + 0.0722 * c.data[3 * i + 2];
-    };
+    auto lum = [](const Layer& c, size_t i) { return double(c.luminance_at(i)); };
     std::vector<size_t> pixels;
     std::vector<double> ratio, needed_n, rays_a_all, reference_share;
     double total_rays_a = 0, total_rays_per_sample = 0;

@@ -51,10 +51,6 @@ struct FrameRecord {
     double rmse = NAN, rmse_swept = NAN, rmse_changed = NAN;
 };
 
-float luminance_at(const Layer& c, size_t i) {
-    return 0.2126f * c.data[3 * i] + 0.7152f * c.data[3 * i + 1] + 0.0722f * c.data[3 * i + 2];
-}
-
 double mean(const std::vector<double>& v) {
     double s = 0;
     for (double x : v) s += x;
@@ -138,8 +134,8 @@ int run_bench_cache(const BenchArgs& a) {
         for (const auto& [f, ref] : reference) {
             const Layer& c = ref.get("color");
             for (size_t i = 0; i < n; ++i) {
-                lo[i] = std::min(lo[i], luminance_at(c, i));
-                hi[i] = std::max(hi[i], luminance_at(c, i));
+                lo[i] = std::min(lo[i], c.luminance_at(i));
+                hi[i] = std::max(hi[i], c.luminance_at(i));
             }
         }
         for (size_t i = 0; i < n; ++i) {

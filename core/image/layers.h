@@ -51,6 +51,10 @@ struct Layer {
     // EXR channel names: the main `color` layer is R,G,B; others `name.R/G/B` for colours,
     // `name.X/Y/Z` for vectors and `name.Y` for scalars.
     std::vector<std::string> channel_names() const;
+    // Texel i's luminance (math/types.h's weights) of an RGB layer.
+    float luminance_at(size_t i) const {
+        return luminance(vec3(data[3 * i], data[3 * i + 1], data[3 * i + 2]));
+    }
 };
 
 class LayerSet {

@@ -16,6 +16,12 @@
 
 namespace freqlab {
 
+// The two relMSE floors, named once. Images (radiance of display-referred scenes, ~1): an
+// absolute eps, so dark pixels do not dominate. Lightmaps (irradiance in each scene's own
+// units, 1e-2 to 1e2): eps relative to the reference's mean (lightmap_baker.h).
+constexpr double kImageRelMseEpsilon = 0.01;
+constexpr double kLightmapRelMseEpsilonOfMean = 1e-3;
+
 struct ImageMetrics {
     double rmse = 0, relmse = 0, ssim = 1, max_abs = 0;
     long nonfinite = 0;
@@ -24,7 +30,8 @@ struct ImageMetrics {
 // Compares one layer of the same name in both sets (default `color`). Sizes must match; a
 // non-finite REF value is an error (a reference must be clean).
 ImageMetrics compare_layers(const LayerSet& test, const LayerSet& ref,
-                            const std::string& layer = "color", double relmse_eps = 0.01);
+                            const std::string& layer = "color",
+                            double relmse_eps = kImageRelMseEpsilon);
 
 // SSIM of two single-channel images of equal size (row-major).
 double ssim(const std::vector<float>& a, const std::vector<float>& b, int width, int height);

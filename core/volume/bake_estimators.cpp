@@ -580,9 +580,9 @@ BakeEstimator::ScatteredSurfaceLight BakeEstimator::surface_light_scattered(
     const vec3 intensity = radiance * float(d * d / (double(cos_y) * pdf_w2));
     // Scattered at x and again on the way from y: order 2 and up, none under media_bounces 1.
     if (settings_.media_bounces >= 2)
-        out.multiple = float(to_receiver) * area_response_rescattered(intensity, w2, d,
-                                                                      hit.shading_normal, optics,
-                                                                      m.here.g, m.w, counters);
+        out.multiple =
+            float(to_receiver) * area_response_rescattered(intensity, w2, d, hit.shading_normal,
+                                                           optics, m.here.g, m.w, counters);
     return out;
 }
 

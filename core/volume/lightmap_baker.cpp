@@ -314,7 +314,8 @@ LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref, const
     }
     if (e.texels == 0) return e;
     mean_ref /= double(e.texels) * ch;
-    const double eps2 = 1e-6 * mean_ref * mean_ref + 1e-30;
+    const double eps = kLightmapRelMseEpsilonOfMean * mean_ref;
+    const double eps2 = eps * eps + 1e-30;
     double rel = 0.0, sq = 0.0, ref2 = 0.0;
     for (size_t i = 0; i < ref.pixel_count(); ++i) {
         if (!measured(valid, only, i)) continue;

@@ -17,6 +17,7 @@
 
 #include "base/job.h"
 #include "image/layers.h"
+#include "image/metrics.h"
 #include "volume/bake_estimators.h"
 #include "volume/lightmap_atlas.h"
 
