@@ -551,11 +551,15 @@ BakeEstimator::ScatteredSurfaceLight BakeEstimator::surface_light_scattered(
     if (!hit.valid) return {};
     // Surfaces the receiver sees reach it through its own indirect segment (the area tables
     // count their light scattered anywhere on the way); this is the light of the others.
-    const vec3 to_y = hit.position - p;
+    // From the spawned origin, to y's own distance from it: measured from p, the shortened ray
+    // still reached y's surface whenever y lay closer than its cosine (|y - o| = |y - p| -
+    // eps cos), so a visible y nearby read as hidden and its light was counted twice.
+    const vec3 o = origin(p, n);
+    const vec3 to_y = hit.position - o;
     const float d_y = glm::length(to_y);
     if (glm::dot(to_y, n) > 1e-3f * d_y) {
         ++counters.rays;
-        if (!scene_.occluded(shadow_ray(origin(p, n), to_y / d_y, d_y))) return {};
+        if (!scene_.occluded(shadow_ray(o, to_y / d_y, d_y))) return {};
     }
     const Material& material = scene_.scene().materials[size_t(hit.material)];
     if (material.type == BrdfType::Mirror) return {};
