@@ -458,7 +458,8 @@ TEST(Bake, ImpulseTexelEstimateIsTheFilteredBakedTexel) {
     LightmapBaker baker(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
     baker.run();
     const ObjectLightmap& floor = baker.lightmaps()[0];
-    const Layer& stored = baker.layers(0).get("lm_irradiance");
+    const LayerSet baked = baker.layers(0);
+    const Layer& stored = baked.get("lm_irradiance");
     const BakeEstimator estimator(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
     BakeSettings own = s;
     own.texel_mc_radius = 0;
