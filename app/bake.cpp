@@ -94,10 +94,21 @@ void print_debug_texel(const RayScene& rays, const Media& media, const ImpulseTa
         "  irradiance (luminance) over %d paths:   surface      single    multiple"
         "       total\n",
         settings.spp);
+    std::unique_ptr<VertexCorrectionField> own_field;
     for (BakeMethod m :
          {BakeMethod::Surface, BakeMethod::Extinction, BakeMethod::Impulse, BakeMethod::Vpt}) {
         if (m == BakeMethod::Impulse && !tables && !media.empty()) continue;
-        const BakeEstimator estimator(rays, media, tables, m, settings);
+        BakeEstimator estimator(rays, media, tables, m, settings);
+        // Impulse as a bake runs it: with the baker's vertex correction field, or one built
+        // here when another method was baked.
+        if (m == BakeMethod::Impulse && settings.vertex_corrections && tables && !media.empty() &&
+            settings.lit_medium_depth >= 0) {
+            if (!baker.vertex_corrections())
+                own_field = std::make_unique<VertexCorrectionField>(rays, media, tables, settings,
+                                                                    baker.lightmaps());
+            estimator.set_vertex_corrections(baker.vertex_corrections() ? baker.vertex_corrections()
+                                                                        : own_field.get());
+        }
         const IrradianceParts mean =
             texel_estimate(estimator, baker.lightmaps(), lightmap_index, size_t(y) * map->width + x,
                            settings.seed, settings.spp);

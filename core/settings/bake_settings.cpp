@@ -79,6 +79,24 @@ const SettingsSchema& BakeSettings::schema() {
                     "tables: the tables' multiple response (the seed's), with order 2 of "
                     "occluded connections through the lit medium. Deeper path vertices and "
                     "surface light use the tables either way.")
+            .choice(&BakeSettings::texel_surface_light, "texel_surface_light", {"walk", "tables"},
+                    kInvalidatesBake,
+                    "Impulse: where the texel's light of other surfaces, scattered on its way, "
+                    "comes from. walk: the texel's walk (at texel_mc_rate) takes, where it "
+                    "reaches a surface after scattering, that surface's light (its direct light, "
+                    "tables and bounces): single and multiple through the real media and "
+                    "geometry, hidden surfaces included; tables: the indirect segment's vertex "
+                    "as an area emitter in the tables' infinite medium, with a control variate "
+                    "and hidden_surface_light (a grazing vertex weighs d^2 / cos: fireflies).")
+            .field(&BakeSettings::vertex_corrections, "vertex_corrections", 0, 1, "",
+                   kInvalidatesBake,
+                   "Impulse: path vertices deeper than lit_medium_depth take the texels' Monte "
+                   "Carlo terms of their emitters (single-scattering corrections, lit medium, the "
+                   "multiple-scattering walk) from a field estimated before the bake, read "
+                   "bilinearly where they land: the tables' infinite medium otherwise puts "
+                   "1.2-1.4x the single and 2-2.8x the multiple scattering on cornell_fog's "
+                   "walls, which every texel seeing them inherits. Costs ceil(spp x "
+                   "texel_mc_rate) prepass paths per texel.")
             .choice(&BakeSettings::tracking, "tracking", {"exact", "ratio"}, kInvalidatesBake,
                     "How extinction and impulse segments cross density grids: exact visits every "
                     "voxel (3D DDA; O(1) for grids that vary along one axis); ratio tracks "

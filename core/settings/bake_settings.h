@@ -14,6 +14,8 @@ enum class BackScatter { Off, Albedo, On };
 enum class Tracking { Exact, Ratio };
 // Where impulse's multiple scattering at a texel comes from (issue "Method B, part 3").
 enum class TexelMultiple { Walk, Tables };
+// Where impulse's in-scattered light of other surfaces at a texel comes from.
+enum class TexelSurfaceLight { Walk, Tables };
 
 struct BakeSettings {
     int spp = 64;            // paths per texel
@@ -30,6 +32,10 @@ struct BakeSettings {
     // real media and geometry (a control variate on the tables' half-space model).
     bool single_correction = true;
     TexelMultiple texel_multiple = TexelMultiple::Walk;
+    TexelSurfaceLight texel_surface_light = TexelSurfaceLight::Walk;
+    // Impulse: deeper path vertices read the texels' Monte Carlo terms of their emitters,
+    // estimated before the bake (volume/vertex_corrections.h).
+    bool vertex_corrections = true;
     // Impulse, at the texel: the fraction of paths on which the Monte Carlo terms through the
     // real media run (single-scattering corrections, hidden surfaces' light, the multiple-
     // scattering walk), weighted up by its inverse (Russian roulette: unbiased at any spp).

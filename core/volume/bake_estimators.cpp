@@ -5,6 +5,7 @@
 #include "base/error.h"
 #include "math/sampling.h"
 #include "math/sh.h"
+#include "volume/vertex_corrections.h"
 
 namespace freqlab {
 
@@ -73,6 +74,10 @@ BakeEstimator::BakeEstimator(const RayScene& scene, const Media& media, const Im
 bool BakeEstimator::texel_walk() const {
     return scatters_ && settings_.texel_multiple == TexelMultiple::Walk &&
            settings_.media_bounces > 1;
+}
+
+bool BakeEstimator::surface_light_walk() const {
+    return scatters_ && settings_.texel_surface_light == TexelSurfaceLight::Walk;
 }
 
 vec3 BakeEstimator::origin(const vec3& p, const vec3& n) const {
@@ -723,7 +728,8 @@ vec3 BakeEstimator::local_single_correction(const EmitterSample& s, const vec3& 
 
 IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const vec3& albedo,
                                             int depth, CounterRng& rng, BakeCounters& counters,
-                                            FixedDirect* fixed, IrradianceParts* deferred) const {
+                                            FixedDirect* fixed, IrradianceParts* deferred,
+                                            bool corrected) const {
     IrradianceParts parts;
     const float albedo_lum = luminance(albedo);
     // One buffer per path depth and thread: no allocation per vertex.
@@ -744,16 +750,27 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     const bool lit_here = scatters_ && depth <= settings_.lit_medium_depth;
     occluded.assign(lit_here ? local.size() : 0, OccludedConnection{});
     const bool walk_here = lit_here && texel_walk();
+    // Without the tables' multiple scattering where a walk supplies it (here or in the field).
+    const bool no_multiple = walk_here || (corrected && texel_walk());
+    // Other surfaces' light scattered on its way here comes from the texel's walk, not from
+    // the indirect segment's vertex in the tables' infinite medium.
+    const bool prepass = prepass_surface_depth_ >= 0;
+    const bool surface_walk_here =
+        lit_here && surface_light_walk() &&
+        (prepass ? prepass_surface_depth_ <= settings_.bounces : depth < settings_.bounces);
+    // A vertex whose field value holds its surface light's scattering (vertex_corrections.h).
+    const bool field_surface_light =
+        corrected && depth < settings_.bounces && corrections_->has_surface_light();
     for (size_t i = 0; i < local.size(); ++i) {
         const EmitterSample& s = local[i];
         OccludedConnection c;
         OccludedConnection* want = lit_here ? &c : nullptr;
         if (!fixed || !s.fixed) {
-            if (!direct_light(s, p, n, albedo_lum, rng, counters, parts, want, walk_here) &&
+            if (!direct_light(s, p, n, albedo_lum, rng, counters, parts, want, no_multiple) &&
                 lit_here)
                 occluded[i] = c;
         } else if (learn) {
-            if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, want, walk_here) &&
+            if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, want, no_multiple) &&
                 lit_here)
                 fixed->occluded.emplace_back(s.light, c);
         }
@@ -789,22 +806,40 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
                              : single_correction(local[i], p, n, rng, counters);
     }
     buffers[size_t(depth)] = std::move(local);
-    if (mc_here && settings_.hidden_surface_light && depth == 0 && settings_.bounces > 0) {
+    if (mc_here && settings_.hidden_surface_light && !surface_walk_here && !prepass && depth == 0 &&
+        settings_.bounces > 0) {
         const ScatteredSurfaceLight hidden = surface_light_scattered(p, n, rng, counters);
         mc.single += hidden.single;
         mc.multiple += hidden.multiple;
     }
-    if (walk_here && mc_here) {
-        // Orders 2+ through the real media (texel_multiple = walk): VPT's walk from the
-        // receiver, NEE from its second scattering event on, ending at the first surface.
+    if ((walk_here || surface_walk_here) && mc_here) {
+        // Through the real media: VPT's walk from the receiver, ending at the first surface;
+        // emitters' orders 2+ by NEE from its second scattering event on (texel_multiple =
+        // walk), the surface it ends on after scattering as the light of that surface
+        // (texel_surface_light = walk).
+        IrradianceParts surface_light;
+        TexelWalk texel;
+        texel.emitters_multiple = walk_here;
+        texel.surface_light_depth = !surface_walk_here ? -1
+                                    : prepass          ? prepass_surface_depth_
+                                                       : depth + 1;
+        texel.surface_light = &surface_light;
         const vec3 ld = sample_cosine_hemisphere(rng.next_float(), rng.next_float());
         if (ld.z > 1e-6f)
             mc.multiple +=
-                walk(origin(p, n), Frame(n).to_world(ld), vec3(kPi), rng, counters, true).multiple;
+                walk(origin(p, n), Frame(n).to_world(ld), vec3(kPi), rng, counters, &texel)
+                    .multiple;
+        // The prepass files surface light under `surface`, where nothing else of the texel's
+        // own Monte Carlo terms lands (no indirect segment runs there): the field keeps it apart.
+        if (prepass)
+            mc.surface += surface_light.total();
+        else
+            mc += surface_light;
     }
-    if (depth < settings_.bounces)
+    if (depth < settings_.bounces && !(prepass && depth == 0))
         indirect_segment(p, n, albedo_lum, depth, rng, counters, parts,
-                         mc_here && settings_.single_correction ? &mc.single : nullptr, deferred);
+                         mc_here && settings_.single_correction ? &mc.single : nullptr, deferred,
+                         !surface_walk_here && !field_surface_light);
     if (mc_here) {
         mc.surface *= mc_weight;
         mc.single *= mc_weight;
@@ -817,7 +852,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
 void BakeEstimator::indirect_segment(const vec3& p, const vec3& n, float albedo_lum, int depth,
                                      CounterRng& rng, BakeCounters& counters,
                                      IrradianceParts& parts, vec3* correction,
-                                     IrradianceParts* deferred) const {
+                                     IrradianceParts* deferred, bool scatter) const {
     // One indirect segment, cosine-sampled: irradiance = pi x radiance on average.
     const float u1 = rng.next_float(), u2 = rng.next_float();
     const vec3 local_dir = sample_cosine_hemisphere(u1, u2);
@@ -833,9 +868,8 @@ void BakeEstimator::indirect_segment(const vec3& p, const vec3& n, float albedo_
     // y's deferred Monte Carlo terms travel to p apart from the rest (the response to y's
     // light is linear in it), so that the baker filters them too.
     IrradianceParts sub_deferred;
-    const IrradianceParts sub =
-        surface_path(hit.position, hit.shading_normal, albedo_y, depth + 1, rng, counters, nullptr,
-                     deferred ? &sub_deferred : nullptr);
+    const IrradianceParts sub = vertex_irradiance(hit, albedo_y, depth + 1, rng, counters,
+                                                  deferred ? &sub_deferred : nullptr);
     const vec3 radiance = albedo_y * kInvPi * sub.total();  // L(y -> p), diffuse
     const vec3 radiance_deferred = albedo_y * kInvPi * sub_deferred.total();
     // A vertex that gathered nothing (its emitters hidden, its own path lost) sends nothing to
@@ -846,7 +880,7 @@ void BakeEstimator::indirect_segment(const vec3& p, const vec3& n, float albedo_
     if (attenuates_) optics = segment_optics(p, dir, hit.distance, rng);
     parts.surface += kPi * radiance * optics.transmittance_float();
     if (any_deferred) deferred->surface += kPi * radiance_deferred * optics.transmittance_float();
-    if (scatters_) {
+    if (scatters_ && scatter) {
         // y as a differential-area emitter of intensity L dA cos_y max(n_y . u, 0) / cos_y: with
         // dA = d^2 domega / cos_y and domega = 1 / pdf, I0 = L d^2 / (cos_y pdf).
         const float cos_y = std::max(1e-3f, std::abs(glm::dot(hit.shading_normal, dir)));
@@ -937,8 +971,10 @@ IrradianceParts BakeEstimator::volume_path(const vec3& p, const vec3& n, Counter
 }
 
 IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, CounterRng& rng,
-                                    BakeCounters& counters, bool media_multiple_only) const {
+                                    BakeCounters& counters, const TexelWalk* texel) const {
     IrradianceParts parts;
+    const bool media_multiple_only = texel != nullptr;
+    const bool gather_emitters = !texel || texel->emitters_multiple;
     std::vector<EmitterSample> emitters;
     int chain = 0;      // scattering events since the last surface vertex
     int category = -1;  // fixed at the first surface vertex: 0 surface, 1 single, 2 multiple
@@ -950,7 +986,7 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
         ++counters.rays;
         const SurfaceHit hit = scene_.intersect(Ray{pos, dir, 0.0f, INFINITY});
         const double t_max = hit.valid ? double(hit.distance) : kInfinity;
-        if (!media_.empty() && chain < settings_.media_bounces &&
+        if (!media_.empty() && chain < settings_.media_bounces && gather_emitters &&
             !(media_multiple_only && chain == 0))
             add(category >= 0 ? category : (chain == 0 ? 1 : 2),
                 throughput * point_lights_along(pos, dir, t_max, rng, counters));
@@ -964,7 +1000,8 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
             throughput *= float(c.sigma_s / c.sigma_t);
             const int cat = category >= 0 ? category : (chain == 1 ? 1 : 2);
             sample_emitters(x, rng, emitters);
-            if (media_multiple_only && chain == 1) emitters.clear();  // single: not asked
+            if (!gather_emitters || (media_multiple_only && chain == 1))
+                emitters.clear();  // single: not asked
             for (const EmitterSample& s : emitters) {
                 // point_lights_along() has point lights; behind a quad nothing arrives.
                 if (s.kind == EmitterKind::Point || s.behind) continue;
@@ -987,7 +1024,12 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
             }
             continue;
         }
-        if (!hit.valid || media_multiple_only) break;
+        if (media_multiple_only) {
+            if (hit.valid && chain > 0 && texel->surface_light_depth >= 0)
+                add_walk_surface_light(hit, chain, throughput, *texel, rng, counters);
+            break;
+        }
+        if (!hit.valid) break;
         if (category < 0) category = chain == 0 ? 0 : (chain == 1 ? 1 : 2);
         if (++surface_vertices > settings_.bounces) break;
         const Material& material = scene_.scene().materials[size_t(hit.material)];
@@ -1015,6 +1057,33 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
         dir = Frame(ny).to_world(ld);
         pos = origin(hit.position, ny);
     }
+    return parts;
+}
+
+void BakeEstimator::add_walk_surface_light(const SurfaceHit& hit, int chain, const vec3& throughput,
+                                           const TexelWalk& texel, CounterRng& rng,
+                                           BakeCounters& counters) const {
+    // The walk scattered `chain` times since the texel and reached y: y's radiance towards it,
+    // a diffuse vertex of the surface path (the same estimate an indirect segment takes).
+    const Material& material = scene_.scene().materials[size_t(hit.material)];
+    if (material.type == BrdfType::Mirror) return;
+    const vec3 albedo_y = material.albedo.eval(hit.uv);
+    if (glm::all(glm::equal(albedo_y, vec3(0.0f)))) return;
+    const IrradianceParts at_y =
+        vertex_irradiance(hit, albedo_y, texel.surface_light_depth, rng, counters);
+    const vec3 arriving = throughput * albedo_y * kInvPi * at_y.total();
+    (chain == 1 ? texel.surface_light->single : texel.surface_light->multiple) += arriving;
+}
+
+IrradianceParts BakeEstimator::vertex_irradiance(const SurfaceHit& hit, const vec3& albedo,
+                                                 int depth, CounterRng& rng, BakeCounters& counters,
+                                                 IrradianceParts* deferred) const {
+    vec3 correction(0.0f);
+    const bool corrected = corrections_ && scatters_ && depth > settings_.lit_medium_depth &&
+                           corrections_->at(hit, depth < settings_.bounces, &correction);
+    IrradianceParts parts = surface_path(hit.position, hit.shading_normal, albedo, depth, rng,
+                                         counters, nullptr, deferred, corrected);
+    parts.single += correction;
     return parts;
 }
 

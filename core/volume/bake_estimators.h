@@ -84,11 +84,23 @@ struct BakeCounters {
     long guarded = 0;          // non-finite estimates dropped
 };
 
+class VertexCorrectionField;
+
 class BakeEstimator {
   public:
     // `tables` is needed by Impulse only (may be null otherwise).
     BakeEstimator(const RayScene& scene, const Media& media, const ImpulseTables* tables,
                   BakeMethod method, const BakeSettings& settings);
+    // Impulse: path vertices deeper than bake.lit_medium_depth read the texels' Monte Carlo
+    // terms from `field` (volume/vertex_corrections.h; null: the tables alone). Not owned.
+    void set_vertex_corrections(const VertexCorrectionField* field) { corrections_ = field; }
+    const VertexCorrectionField* vertex_corrections() const { return corrections_; }
+    // The field's prepass (vertex_corrections.cpp): at the texel no indirect segment runs, and
+    // the walk's surface light, the surface it reaches evaluated at `surface_light_depth`, is
+    // filed under the deferred terms' `surface`, apart from the emitters' terms.
+    void set_field_prepass(int surface_light_depth) {
+        prepass_surface_depth_ = surface_light_depth;
+    }
     // An emitter connection that brings no direct light (occluded, or below the horizon).
     struct OccludedConnection {
         bool occluded = false;
@@ -231,16 +243,25 @@ class BakeEstimator {
     vec3 unoccluded_higher_orders(const EmitterSample& s, const vec3& p, const vec3& n,
                                   float albedo_lum, CounterRng& rng, BakeCounters& counters) const;
     void sample_emitters(const vec3& p, CounterRng& rng, std::vector<EmitterSample>& out) const;
+    // corrected: the caller adds the vertex correction field's value at p (which holds the
+    // walk's multiple scattering of the emitters, so the tables' is left out).
     IrradianceParts surface_path(const vec3& p, const vec3& n, const vec3& albedo, int depth,
                                  CounterRng& rng, BakeCounters& counters,
-                                 FixedDirect* fixed = nullptr,
-                                 IrradianceParts* deferred = nullptr) const;
+                                 FixedDirect* fixed = nullptr, IrradianceParts* deferred = nullptr,
+                                 bool corrected = false) const;
+    // A surface vertex at depth `depth` reached by a ray (hit): its surface_path plus, when the
+    // vertex correction field covers it, the field's value (added to the single part: it is
+    // in-scattered light). What indirect segments and walks take as the vertex's irradiance.
+    IrradianceParts vertex_irradiance(const SurfaceHit& hit, const vec3& albedo, int depth,
+                                      CounterRng& rng, BakeCounters& counters,
+                                      IrradianceParts* deferred = nullptr) const;
     // The path's segment from (p, n) to the next surface vertex and that vertex's light, into
     // parts; correction (when given) gets the segment's single-scattering correction; the
-    // next vertex's deferred terms, carried to p, go to *deferred (when given).
+    // next vertex's deferred terms, carried to p, go to *deferred (when given); scatter: the
+    // vertex's light scattered on the segment (tables), else only its transmitted light.
     void indirect_segment(const vec3& p, const vec3& n, float albedo_lum, int depth,
                           CounterRng& rng, BakeCounters& counters, IrradianceParts& parts,
-                          vec3* correction, IrradianceParts* deferred) const;
+                          vec3* correction, IrradianceParts* deferred, bool scatter = true) const;
     // Direct light of one emitter sample at (p, n): visibility, transmittance and, for impulse,
     // its scattered response, added to parts.
     // Returns false when the connection is occluded or below the horizon; then, for impulse,
@@ -259,12 +280,26 @@ class BakeEstimator {
                         CounterRng& rng, Line& line) const;
     IrradianceParts volume_path(const vec3& p, const vec3& n, CounterRng& rng,
                                 BakeCounters& counters) const;
+    // What a texel's walk gathers (walk's media_only mode): it ends at the first surface.
+    struct TexelWalk {
+        // Emitters' light scattered twice or more (NEE from the second scattering event on).
+        bool emitters_multiple = true;
+        // >= 0: where the walk reaches a surface after scattering, that surface's light (its
+        // surface_path at this depth: direct light, tables, bounces), into *surface_light
+        // (single: scattered once; multiple: more). -1: none.
+        int surface_light_depth = -1;
+        IrradianceParts* surface_light = nullptr;
+    };
     // VPT's random walk from pos along dir: free flights, scattering in media (NEE, HG),
     // diffuse bounces on surfaces; what arrives back at pos, times `throughput`.
-    // media_multiple_only: only the light scattered twice or more between pos and the first
-    // surface (the walk ends there; no single scattering is gathered).
+    // texel (when given): only what the media scatter between pos and the first surface
+    // (TexelWalk; no emitter's single scattering is gathered).
     IrradianceParts walk(vec3 pos, vec3 dir, vec3 throughput, CounterRng& rng,
-                         BakeCounters& counters, bool media_multiple_only = false) const;
+                         BakeCounters& counters, const TexelWalk* texel = nullptr) const;
+    // walk's TexelWalk surface light at the surface it ends on.
+    void add_walk_surface_light(const SurfaceHit& hit, int chain, const vec3& throughput,
+                                const TexelWalk& texel, CounterRng& rng,
+                                BakeCounters& counters) const;
     // Light of the scene's point lights scattered once anywhere on the segment o + t d,
     // t < t_max, towards o: equiangular sampling, since collision-point NEE to a point light
     // has infinite variance in a medium (1/r^2 near the light).
@@ -289,6 +324,8 @@ class BakeEstimator {
     vec3 origin(const vec3& p, const vec3& n) const;
     // Impulse's texel vertices take their multiple scattering from a walk (BakeSettings).
     bool texel_walk() const;
+    // ... and the in-scattered light of other surfaces (BakeSettings::texel_surface_light).
+    bool surface_light_walk() const;
 
     const RayScene& scene_;
     const Media& media_;
@@ -300,6 +337,8 @@ class BakeEstimator {
     // never changes, only their coefficients): attenuate it (extinction, impulse, and vpt's
     // probes' direct light) and add its scattered response (impulse).
     bool attenuates_ = false, scatters_ = false;
+    const VertexCorrectionField* corrections_ = nullptr;
+    int prepass_surface_depth_ = -1;
     std::unique_ptr<ImpulseIrradianceCache> irradiance_;  // impulse: tabulated double products
     // Scenes with one medium: its table and the Media::version() it was resolved at.
     mutable std::atomic<const ImpulseIrradiance*> single_table_{nullptr};

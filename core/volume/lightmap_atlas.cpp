@@ -1,6 +1,7 @@
 #include "volume/lightmap_atlas.h"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 #include <tbb/parallel_for.h>
@@ -27,6 +28,19 @@ struct Chart {
     vec2 lo{1e30f}, hi{-1e30f};      // projected bounds (scene units)
     int x = 0, y = 0, w = 0, h = 0;  // placement in texels, gutter included
 };
+
+// Texels a chart's extent covers: the nearest whole number, the chart centred on them
+// (chart_offset, within +-0.25 texel), so that every texel centre lies at least a quarter of a
+// texel inside a rectangular chart's edges. A centre on an edge samples the seam where the
+// surface meets its neighbour (a box's foot on the floor, a room's corner), where half the
+// hemisphere is the neighbour's plane and a path may leave through the seam.
+int chart_cells(float extent, float density) {
+    return std::max(1, int(std::lround(extent * density)));
+}
+
+float chart_offset(float extent, float density) {
+    return 0.5f * (float(chart_cells(extent, density)) - extent * density);
+}
 
 int find_root(std::vector<int>& parent, int i) {
     while (parent[i] != i) i = parent[i] = parent[parent[i]];
@@ -85,8 +99,8 @@ std::vector<Chart> make_charts(const TriangleMesh& mesh, const std::vector<vec3>
 ivec2 pack(std::vector<Chart>& charts, float density, int padding, int max_size) {
     double area = 0.0;
     for (Chart& c : charts) {
-        c.w = int(std::ceil((c.hi.x - c.lo.x) * density)) + 1 + 2 * padding;
-        c.h = int(std::ceil((c.hi.y - c.lo.y) * density)) + 1 + 2 * padding;
+        c.w = chart_cells(c.hi.x - c.lo.x, density) + 2 * padding;
+        c.h = chart_cells(c.hi.y - c.lo.y, density) + 2 * padding;
         area += double(c.w) * c.h;
     }
     // Near-square atlases: the side holds the widest chart and ~15 % shelf waste.
@@ -181,12 +195,14 @@ std::vector<ObjectLightmap> build_lightmaps(const RayScene& rs, const AtlasSetti
         const Material& material = scene.materials[obj.material];
         tbb::parallel_for(size_t(0), charts.size(), [&](size_t ci) {
             const Chart& c = charts[ci];
+            const vec2 offset(chart_offset(c.hi.x - c.lo.x, density),
+                              chart_offset(c.hi.y - c.lo.y, density));
             for (int t : c.triangles) {
                 const uvec3 tri = mesh.triangles[size_t(t)];
                 vec2 q[3];
                 for (int k = 0; k < 3; ++k) {
                     q[k] = (project(world[tri[k]], c.axis) - c.lo) * density +
-                           vec2(float(settings.padding) + 0.5f);
+                           vec2(float(settings.padding)) + offset;
                     map.triangle_uv[size_t(t) * 3 + size_t(k)] = q[k] + vec2(c.x, c.y);
                 }
                 const vec2 lo = glm::min(q[0], glm::min(q[1], q[2]));
@@ -269,6 +285,43 @@ std::vector<TexelState> dilate(const ObjectLightmap& map, std::vector<float>& va
         state.swap(next);
     }
     return state;
+}
+
+bool lightmap_uv(const RayScene& rays, const ObjectLightmap& map, const SurfaceHit& hit, vec2* uv) {
+    if (hit.primitive < 0 || size_t(hit.primitive) * 3 + 2 >= map.triangle_uv.size()) return false;
+    // Barycentrics of the hit in the triangle (world space, the instance at time 0).
+    const SceneObject& obj = rays.scene().objects[size_t(hit.object)];
+    const uvec3 tri = obj.mesh->triangles[size_t(hit.primitive)];
+    const mat4& to_world = rays.object_to_world(hit.object);
+    const vec3 a = vec3(to_world * vec4(obj.mesh->positions[tri.x], 1.0f));
+    const vec3 b = vec3(to_world * vec4(obj.mesh->positions[tri.y], 1.0f));
+    const vec3 c = vec3(to_world * vec4(obj.mesh->positions[tri.z], 1.0f));
+    const vec3 n = glm::cross(b - a, c - a);
+    const float area2 = glm::dot(n, n);
+    if (!(area2 > 0.0f)) return false;
+    const float wb = glm::dot(glm::cross(hit.position - a, c - a), n) / area2;
+    const float wc = glm::dot(glm::cross(b - a, hit.position - a), n) / area2;
+    const float wa = 1.0f - wb - wc;
+    const vec2* t = &map.triangle_uv[size_t(hit.primitive) * 3];
+    *uv = wa * t[0] + wb * t[1] + wc * t[2];
+    return true;
+}
+
+vec3 sample_bilinear(const float* values, int channels, int width, int height, vec2 uv) {
+    const float fx = uv.x - 0.5f, fy = uv.y - 0.5f;
+    const int x0 = std::clamp(int(std::floor(fx)), 0, width - 1);
+    const int y0 = std::clamp(int(std::floor(fy)), 0, height - 1);
+    const int x1 = std::min(x0 + 1, width - 1), y1 = std::min(y0 + 1, height - 1);
+    const float wx = std::clamp(fx - float(x0), 0.0f, 1.0f),
+                wy = std::clamp(fy - float(y0), 0.0f, 1.0f);
+    auto at = [&](int x, int y) {
+        vec3 v(0.0f);
+        const float* p = values + (size_t(y) * size_t(width) + size_t(x)) * size_t(channels);
+        for (int c = 0; c < std::min(3, channels); ++c) v[c] = p[c];
+        return v;
+    };
+    return (1 - wy) * ((1 - wx) * at(x0, y0) + wx * at(x1, y0)) +
+           wy * ((1 - wx) * at(x0, y1) + wx * at(x1, y1));
 }
 
 }  // namespace freqlab

@@ -4,12 +4,14 @@
 // Charts are automatic: triangles grouped by the dominant axis of their world normal (six
 // classes) and by shared vertices, each group projected onto its axis plane at
 // `texel_density` texels per scene unit and shelf-packed (tallest first) with a gutter of
-// `padding` texels. A texel whose centre falls inside a triangle is placed at that point;
-// a valid texel whose hemisphere sees more back faces than `backface_tolerance` (a fraction of
-// `validity_rays` rays over its hemisphere) lies inside geometry and is flagged; after a bake,
-// empty and invalid texels next to valid ones take their neighbours' mean (dilation), so
-// bilinear lookups do not bleed black. Spheres (exact primitives, no mesh), moving objects
-// and perfect mirrors get no lightmap (a mirror's appearance is not view-independent).
+// `padding` texels, each chart centred on the nearest whole number of texels (every texel
+// centre at least a quarter texel inside a rectangular chart's edges, never on a seam). A texel
+// whose centre falls inside a triangle is placed at that point; a valid texel whose hemisphere sees
+// more back faces than `backface_tolerance` (a fraction of `validity_rays` rays over its
+// hemisphere) lies inside geometry and is flagged; after a bake, empty and invalid texels next to
+// valid ones take their neighbours' mean (dilation), so bilinear lookups do not bleed black.
+// Spheres (exact primitives, no mesh), moving objects and perfect mirrors get no lightmap (a
+// mirror's appearance is not view-independent).
 //
 // | parameter          | default | meaning                                             |
 // |--------------------|---------|-----------------------------------------------------|
@@ -57,6 +59,12 @@ struct AtlasSettings {
 
 // Objects are placed at time 0. Throws nothing; objects without a lightmap are skipped.
 std::vector<ObjectLightmap> build_lightmaps(const RayScene& scene, const AtlasSettings& settings);
+
+// A surface point's lightmap coordinates (texels) in `map`; false when the hit is not on one
+// of the map's triangles.
+bool lightmap_uv(const RayScene& rays, const ObjectLightmap& map, const SurfaceHit& hit, vec2* uv);
+// Bilinear between texel centres of `channels` floats per texel (RGB read); uv in texels.
+vec3 sample_bilinear(const float* values, int channels, int width, int height, vec2 uv);
 
 // Fills Empty / InsideGeometry texels that touch a Valid (or already dilated) one with the mean
 // of those neighbours, `rings` times; `values` has `channels` floats per texel. Returns the

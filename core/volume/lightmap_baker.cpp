@@ -12,7 +12,12 @@
 namespace freqlab {
 
 nlohmann::json BakeStats::to_json() const {
-    return {{"stages", {{"atlas_ms", atlas_ms}, {"tables_ms", tables_ms}, {"bake_ms", bake_ms}}},
+    return {{"stages",
+             {{"atlas_ms", atlas_ms},
+              {"tables_ms", tables_ms},
+              {"bake_ms", bake_ms},
+              {"vertex_corrections_ms", corrections_ms}}},
+            {"vertex_correction_paths", correction_paths},
             {"rays", rays},
             {"impulse_queries", impulse_queries},
             {"nonfinite", guarded},
@@ -30,6 +35,8 @@ std::string lightmap_name(const Scene& scene, const ObjectLightmap& map) {
 LightmapBaker::LightmapBaker(const RayScene& scene, const Media& media, const ImpulseTables* tables,
                              BakeMethod method, const BakeSettings& settings)
     : scene_(scene),
+      media_(media),
+      tables_(tables),
       estimator_(scene, media, tables, method, settings),
       method_(method),
       settings_(settings) {
@@ -67,6 +74,10 @@ void LightmapBaker::reset() {
     fixed_.assign(maps_.size(), {});  // media may have changed: computed afresh
     for (size_t i = 0; i < maps_.size(); ++i) fixed_[i].assign(maps_[i].texels.size(), {});
     probe_sums_.assign(probe_positions_.size(), {});
+    estimator_.set_vertex_corrections(nullptr);
+    corrections_.reset();
+    stats_.corrections_ms = 0.0;
+    stats_.correction_paths = 0;
     samples_ = 0;
     stats_.bake_ms = 0.0;
     stats_.rays = stats_.impulse_queries = stats_.guarded = 0;
@@ -75,6 +86,16 @@ void LightmapBaker::reset() {
 
 void LightmapBaker::run_pass(int samples, Progress* progress) {
     const auto t0 = Clock::now();
+    if (samples_ == 0 && method_ == BakeMethod::Impulse && settings_.vertex_corrections &&
+        settings_.lit_medium_depth >= 0 && tables_ && !media_.empty() && !corrections_) {
+        // Before the first path: deeper vertices read it (volume/vertex_corrections.h).
+        corrections_ =
+            std::make_unique<VertexCorrectionField>(scene_, media_, tables_, settings_, maps_);
+        estimator_.set_vertex_corrections(corrections_.get());
+        stats_.corrections_ms = ms_since(t0);
+        stats_.correction_paths = corrections_->paths_per_texel();
+        stats_.rays += corrections_->rays();
+    }
     long rows = 0;
     for (const ObjectLightmap& m : maps_) rows += m.height;
     if (progress) progress->begin_stage("bake " + std::string(to_string(method_)), rows);

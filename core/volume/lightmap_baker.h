@@ -20,11 +20,14 @@
 #include "image/metrics.h"
 #include "volume/bake_estimators.h"
 #include "volume/lightmap_atlas.h"
+#include "volume/vertex_corrections.h"
 
 namespace freqlab {
 
 struct BakeStats {
     double atlas_ms = 0.0, tables_ms = 0.0, bake_ms = 0.0;
+    double corrections_ms = 0.0;  // the vertex correction field's prepass (in bake_ms too)
+    int correction_paths = 0;     // its paths per texel (0: no field)
     long rays = 0, impulse_queries = 0, guarded = 0;
     long texels_valid = 0, texels_invalid = 0, texels_total = 0;
     int samples = 0;
@@ -57,9 +60,13 @@ class LightmapBaker {
     const BakeStats& stats() const { return stats_; }
     BakeMethod method() const { return method_; }
     const BakeEstimator& estimator() const { return estimator_; }
+    // The field deeper vertices read (built by the first pass; empty before, or when unused).
+    const VertexCorrectionField* vertex_corrections() const { return corrections_.get(); }
 
   private:
     const RayScene& scene_;
+    const Media& media_;
+    const ImpulseTables* tables_;
     BakeEstimator estimator_;
     BakeMethod method_;
     BakeSettings settings_;
@@ -71,6 +78,7 @@ class LightmapBaker {
     std::vector<std::vector<IrradianceParts>> deferred_sums_;
     // Per lightmap, per texel: its paths' shared direct light (BakeEstimator::FixedDirect).
     std::vector<std::vector<BakeEstimator::FixedDirect>> fixed_;
+    std::unique_ptr<VertexCorrectionField> corrections_;
     std::vector<vec3> probe_positions_;
     std::vector<BakeEstimator::ProbeParts> probe_sums_;
     int samples_ = 0;

@@ -10,19 +10,7 @@ namespace {
 
 // Bilinear between texel centres of an RGB (or scalar) layer; uv in texels.
 vec3 sample_bilinear(const Layer& layer, int width, int height, vec2 uv) {
-    const float fx = uv.x - 0.5f, fy = uv.y - 0.5f;
-    const int x0 = std::clamp(int(std::floor(fx)), 0, width - 1);
-    const int y0 = std::clamp(int(std::floor(fy)), 0, height - 1);
-    const int x1 = std::min(x0 + 1, width - 1), y1 = std::min(y0 + 1, height - 1);
-    const float wx = std::clamp(fx - float(x0), 0.0f, 1.0f),
-                wy = std::clamp(fy - float(y0), 0.0f, 1.0f);
-    auto at = [&](int x, int y) {
-        vec3 v(0.0f);
-        for (int c = 0; c < std::min(3, layer.channels); ++c) v[c] = layer.at(width, x, y, c);
-        return v;
-    };
-    return (1 - wy) * ((1 - wx) * at(x0, y0) + wx * at(x1, y0)) +
-           wy * ((1 - wx) * at(x0, y1) + wx * at(x1, y1));
+    return freqlab::sample_bilinear(layer.data.data(), layer.channels, width, height, uv);
 }
 
 }  // namespace
@@ -81,21 +69,8 @@ LayerSet render_lightmap_preview(const RayScene& rs, const CameraPose& pose, int
             }
             const ObjectLightmap& map = maps[size_t(m)];
             const LayerSet& layers = baked[size_t(m)];
-            // Barycentrics of the hit in the triangle (world space, the instance at time 0).
-            const SceneObject& obj = scene.objects[size_t(hit.object)];
-            const uvec3 tri = obj.mesh->triangles[size_t(hit.primitive)];
-            const mat4& to_world = rs.object_to_world(hit.object);
-            const vec3 a = vec3(to_world * vec4(obj.mesh->positions[tri.x], 1.0f));
-            const vec3 b = vec3(to_world * vec4(obj.mesh->positions[tri.y], 1.0f));
-            const vec3 c3 = vec3(to_world * vec4(obj.mesh->positions[tri.z], 1.0f));
-            const vec3 n = glm::cross(b - a, c3 - a);
-            const float area2 = glm::dot(n, n);
-            if (area2 <= 0.0f) continue;
-            const float wb = glm::dot(glm::cross(hit.position - a, c3 - a), n) / area2;
-            const float wc = glm::dot(glm::cross(b - a, hit.position - a), n) / area2;
-            const float wa = 1.0f - wb - wc;
-            const vec2* t = &map.triangle_uv[size_t(hit.primitive) * 3];
-            const vec2 uv = wa * t[0] + wb * t[1] + wc * t[2];
+            vec2 uv;
+            if (!lightmap_uv(rs, map, hit, &uv)) continue;
             const vec3 total = sample_bilinear(layers.get("lm_total"), map.width, map.height, uv);
             const vec3 e = sample_bilinear(layers.get("lm_irradiance"), map.width, map.height, uv);
             const vec3 s1 =

@@ -16,6 +16,7 @@
 #include "math/sampling.h"
 #include "math/sh.h"
 #include "volume/bake_estimators.h"
+#include "volume/vertex_corrections.h"
 
 namespace freqlab {
 
@@ -260,16 +261,37 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
         // The bake's own walk, averaged over draws of its own.
         constexpr int kDraws = 4096;
         double sum = 0.0, sum2 = 0.0;
+        const TexelWalk emitters_only;
         for (int i = 0; i < kDraws; ++i) {
             const vec3 ld = sample_cosine_hemisphere(rng.next_float(), rng.next_float());
             if (ld.z <= 1e-6f) continue;
             const double v = luminance(
-                walk(origin(p, n), Frame(n).to_world(ld), vec3(kPi), rng, counters, true).multiple);
+                walk(origin(p, n), Frame(n).to_world(ld), vec3(kPi), rng, counters, &emitters_only)
+                    .multiple);
             sum += v, sum2 += v * v;
         }
         const double mean = sum / kDraws;
         line("multiple scattering of every emitter by the texel's walk (%d draws): %.5g +- %.2g",
              kDraws, mean, std::sqrt(std::max(0.0, sum2 / kDraws - mean * mean) / kDraws));
+    }
+    if (surface_light_walk() && settings_.lit_medium_depth >= 0 && settings_.bounces > 0) {
+        // The bake's walk gathering other surfaces' light, averaged over draws of its own.
+        constexpr int kDraws = 1024;
+        TexelWalk surfaces;
+        surfaces.emitters_multiple = false;
+        surfaces.surface_light_depth = 1;
+        IrradianceParts sum;
+        surfaces.surface_light = &sum;
+        for (int i = 0; i < kDraws; ++i) {
+            const vec3 ld = sample_cosine_hemisphere(rng.next_float(), rng.next_float());
+            if (ld.z > 1e-6f)
+                walk(origin(p, n), Frame(n).to_world(ld), vec3(kPi), rng, counters, &surfaces);
+        }
+        line(
+            "other surfaces' light scattered on its way here, by the texel's walk (%d draws): "
+            "single %.5g, multiple %.5g (bake.texel_surface_light = walk)",
+            kDraws, double(luminance(sum.single)) / kDraws,
+            double(luminance(sum.multiple)) / kDraws);
     }
     if (scatters_ && settings_.lit_medium_depth >= 0)
         line(
@@ -279,6 +301,12 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
             "(bake.texel_mc_rate, bake.texel_mc_radius)",
             double(settings_.texel_mc_rate), 1.0 / double(settings_.texel_mc_rate),
             settings_.texel_mc_radius);
+    if (corrections_)
+        line(
+            "deeper path vertices add the vertex correction field where they land: the texels' "
+            "own Monte Carlo terms from a prepass of %d paths a texel, filtered alike "
+            "(bake.vertex_corrections)",
+            corrections_->paths_per_texel());
     return lines;
 }
 
