@@ -169,6 +169,44 @@ TEST(Media, FreeFlightsFollowTheTransmittanceLaw) {
     }
 }
 
+TEST(Media, ForcedCollisionsAreTheConditionedLawWeightedByItsProbability) {
+    // E[weight 1(t < s); found] must be 1 - T(s) for every s <= t_max, through the same grid
+    // and global medium; thin (0.6 across: a third of free flights collide) so that some of
+    // the 4 tries fail. Mean of 40000 weighted indicators at 4.5 sigma (their sample sd).
+    const Media m(media_from(R"([
+        {"sigma_s": 0.3, "sigma_a": 0.1, "bounds": {"box": {"min": [0,-1,-1], "max": [2,1,1]}},
+         "density": {"source": "brushes", "resolution": [16, 8, 8],
+                     "brushes": [{"shape": "ellipsoid", "center": [1,0,0], "size": [1.6,1.6,1.6]}]}},
+        {"sigma_s": 0.02, "sigma_a": 0.01}])"));
+    const vec3 o(-0.5f, 0.05f, 0.02f), d(1, 0, 0);
+    const double t_max = 3.0;
+    const int n = 40000;
+    std::vector<std::pair<double, double>> found;  // (t, weight)
+    int missed = 0;
+    for (int i = 0; i < n; ++i) {
+        CounterRng rng(11, 0, uint64_t(i), 0);
+        double weight = -1.0;
+        const MediumCollision c = m.sample_forced_collision(o, d, t_max, rng, 4, &weight);
+        if (!c.happened) {
+            EXPECT_EQ(weight, 0.0);
+            ++missed;
+            continue;
+        }
+        ASSERT_LT(c.t, t_max);
+        found.emplace_back(c.t, weight);
+    }
+    EXPECT_GT(missed, 0);  // the weight's 1 / Q is exercised
+    for (double s : {0.4, 0.8, 1.2, 1.6, 2.2, 3.0}) {
+        double sum = 0.0, sum2 = 0.0;
+        for (const auto& [t, w] : found) {
+            const double v = t < s ? w : 0.0;
+            sum += v, sum2 += v * v;
+        }
+        const double mean = sum / n, sd = std::sqrt(std::max(0.0, sum2 / n - mean * mean) / n);
+        EXPECT_NEAR(mean, 1.0 - m.transmittance(o, d, s), 4.5 * sd + 1e-9) << "s = " << s;
+    }
+}
+
 TEST(Media, BadInputNamesTheField) {
     auto expect_field = [](const std::string& text, const std::string& field) {
         try {

@@ -13,6 +13,8 @@ namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr float kBelowHorizonKeep = 0.25f;
+// Draws a texel walk's forced first collision tries (Media::sample_forced_collision).
+constexpr int kForcedCollisionTries = 8;
 
 // sin and cos of the area lobes' tilts (a few degrees, area_tables.h) by their Taylor series
 // to the x^9 / x^8 terms: below 1e-7 up to 0.6 rad; sincosf beyond.
@@ -990,8 +992,19 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
             !(media_multiple_only && chain == 0))
             add(category >= 0 ? category : (chain == 0 ? 1 : 2),
                 throughput * point_lights_along(pos, dir, t_max, rng, counters));
-        const MediumCollision c =
-            media_.empty() ? MediumCollision{} : media_.sample_collision(pos, dir, t_max, rng);
+        MediumCollision c;
+        if (media_multiple_only && events == 0) {
+            // From the texel, light that reaches it unscattered is not the walk's: every walk
+            // is made to scatter on its first segment (weighted by the chance it would).
+            double forced = 0.0;
+            if (!media_.empty())
+                c = media_.sample_forced_collision(pos, dir, t_max, rng, kForcedCollisionTries,
+                                                   &forced);
+            if (!c.happened) break;
+            throughput *= float(forced);
+        } else if (!media_.empty()) {
+            c = media_.sample_collision(pos, dir, t_max, rng);
+        }
         if (c.happened) {
             if (chain >= settings_.media_bounces) break;  // the walk ends in the medium
             ++chain;

@@ -363,6 +363,21 @@ MediumCollision Media::sample_collision(const vec3& o, const vec3& d, double t_m
     return best;
 }
 
+MediumCollision Media::sample_forced_collision(const vec3& o, const vec3& d, double t_max,
+                                               CounterRng& rng, int tries, double* weight) const {
+    *weight = 0.0;
+    const double p = 1.0 - transmittance(o, d, t_max);
+    if (!(p > 0.0)) return {};
+    for (int k = 0; k < tries; ++k) {
+        const MediumCollision c = sample_collision(o, d, t_max, rng);
+        if (c.happened) {
+            *weight = p / -std::expm1(double(tries) * std::log1p(-p));
+            return c;
+        }
+    }
+    return {};
+}
+
 double Media::exit_distance(const vec3& o, const vec3& d) const {
     double exit = 0.0;
     for (const Entry& e : media_) {

@@ -117,6 +117,13 @@ class Media {
     // The first real collision before t_max (none: happened = false), exact in distribution.
     MediumCollision sample_collision(const vec3& o, const vec3& d, double t_max,
                                      CounterRng& rng) const;
+    // A collision before t_max given that one happens (a forced collision): up to `tries`
+    // draws of sample_collision, the first that collides kept. *weight is P / Q, where
+    // P = 1 - T(t_max) is the probability of a collision and Q = 1 - (1 - P)^tries that of
+    // finding one: E[weight f(t); found] = P E[f(t) | collision], unbiased. Not found (or no
+    // medium): happened = false, *weight = 0.
+    MediumCollision sample_forced_collision(const vec3& o, const vec3& d, double t_max,
+                                            CounterRng& rng, int tries, double* weight) const;
     // Where the ray leaves the last bounded medium it crosses; infinity when a medium fills
     // all space and the ray is not leaving anything (directional lights' query depth).
     double exit_distance(const vec3& o, const vec3& d) const;
