@@ -91,12 +91,12 @@ const SettingsSchema& BakeSettings::schema() {
             .field(&BakeSettings::vertex_corrections, "vertex_corrections", 0, 1, "",
                    kInvalidatesBake,
                    "Impulse: path vertices deeper than lit_medium_depth take the texels' Monte "
-                   "Carlo terms of their emitters (single-scattering corrections, lit medium, the "
-                   "multiple-scattering walk) from a field estimated before the bake, read "
-                   "bilinearly where they land: the tables' infinite medium otherwise puts "
-                   "1.2-1.4x the single and 2-2.8x the multiple scattering on cornell_fog's "
-                   "walls, which every texel seeing them inherits. Costs ceil(spp x "
-                   "texel_mc_rate) prepass paths per texel.")
+                   "Carlo terms (single-scattering corrections, lit medium, the walk's multiple "
+                   "scattering and other surfaces' light) from a field estimated before the "
+                   "bake, at the nearest texel where they land: the tables' infinite medium "
+                   "otherwise puts 1.2-1.4x the single and 2-2.8x the multiple scattering on "
+                   "cornell_fog's walls, which every texel seeing them inherits. Costs "
+                   "ceil(spp x texel_mc_rate / 2) prepass paths at every second texel.")
             .choice(&BakeSettings::tracking, "tracking", {"exact", "ratio"}, kInvalidatesBake,
                     "How extinction and impulse segments cross density grids: exact visits every "
                     "voxel (3D DDA; O(1) for grids that vary along one axis); ratio tracks "

@@ -304,8 +304,7 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
     if (corrections_)
         line(
             "deeper path vertices add the vertex correction field where they land: the texels' "
-            "own Monte Carlo terms from a prepass of %d paths a texel, filtered alike "
-            "(bake.vertex_corrections)",
+            "own Monte Carlo terms from a prepass of %d paths a texel (bake.vertex_corrections)",
             corrections_->paths_per_texel());
     return lines;
 }
