@@ -33,7 +33,8 @@ const SettingsSchema& BakeSettings::schema() {
                    "floor, what an occluder hides), scattered in the medium in front of it: one "
                    "medium point, a phase-sampled ray to a surface and that surface's direct "
                    "light with its tables (single exactly; order 2 by the in-medium area "
-                   "response there). Needs bake.bounces >= 1 and lit_medium_depth >= 0.")
+                   "response there). Needs bake.bounces >= 1, lit_medium_depth >= 0 and "
+                   "texel_surface_light = tables (the walk gathers that light otherwise).")
             .field(&BakeSettings::single_correction, "single_correction", 0, 1, "",
                    kInvalidatesBake,
                    "Impulse: a distant emitter's (sun, sky) unoccluded single scattering at the "

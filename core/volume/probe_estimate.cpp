@@ -242,8 +242,8 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
         line("  scattered irradiance: single %.5g, multiple %.5g", double(luminance(e.single)),
              double(luminance(e.multiple)));
     }
-    if (scatters_ && settings_.hidden_surface_light && settings_.lit_medium_depth >= 0 &&
-        settings_.bounces > 0) {
+    if (scatters_ && settings_.hidden_surface_light && !surface_light_walk() &&
+        settings_.lit_medium_depth >= 0 && settings_.bounces > 0) {
         // The bake's own estimate, averaged over draws of its own.
         constexpr int kDraws = 1024;
         vec3 single(0.0f), multiple(0.0f);
