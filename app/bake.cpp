@@ -101,8 +101,7 @@ void print_debug_texel(const RayScene& rays, const Media& media, const ImpulseTa
         BakeEstimator estimator(rays, media, tables, m, settings);
         // Impulse as a bake runs it: with the baker's vertex correction field, or one built
         // here when another method was baked.
-        if (m == BakeMethod::Impulse && settings.vertex_corrections && tables && !media.empty() &&
-            settings.lit_medium_depth >= 0) {
+        if (uses_vertex_corrections(m, settings, tables, media)) {
             if (!baker.vertex_corrections())
                 own_field = std::make_unique<VertexCorrectionField>(rays, media, tables, settings,
                                                                     baker.lightmaps());

@@ -287,23 +287,30 @@ std::vector<TexelState> dilate(const ObjectLightmap& map, std::vector<float>& va
     return state;
 }
 
-bool lightmap_uv(const RayScene& rays, const ObjectLightmap& map, const SurfaceHit& hit, vec2* uv) {
-    if (hit.primitive < 0 || size_t(hit.primitive) * 3 + 2 >= map.triangle_uv.size()) return false;
-    // Barycentrics of the hit in the triangle (world space, the instance at time 0).
-    const SceneObject& obj = rays.scene().objects[size_t(hit.object)];
-    const uvec3 tri = obj.mesh->triangles[size_t(hit.primitive)];
-    const mat4& to_world = rays.object_to_world(hit.object);
+TriangleToTexels triangle_to_texels(const RayScene& rays, const ObjectLightmap& map, size_t t) {
+    const SceneObject& obj = rays.scene().objects[size_t(map.object)];
+    const mat4& to_world = rays.object_to_world(map.object);
+    const uvec3 tri = obj.mesh->triangles[t];
     const vec3 a = vec3(to_world * vec4(obj.mesh->positions[tri.x], 1.0f));
     const vec3 b = vec3(to_world * vec4(obj.mesh->positions[tri.y], 1.0f));
     const vec3 c = vec3(to_world * vec4(obj.mesh->positions[tri.z], 1.0f));
+    const vec2* uv = &map.triangle_uv[t * 3];
+    TriangleToTexels m;
+    m.a = a;
+    m.t0 = uv[0];
     const vec3 n = glm::cross(b - a, c - a);
     const float area2 = glm::dot(n, n);
-    if (!(area2 > 0.0f)) return false;
-    const float wb = glm::dot(glm::cross(hit.position - a, c - a), n) / area2;
-    const float wc = glm::dot(glm::cross(b - a, hit.position - a), n) / area2;
-    const float wa = 1.0f - wb - wc;
-    const vec2* t = &map.triangle_uv[size_t(hit.primitive) * 3];
-    *uv = wa * t[0] + wb * t[1] + wc * t[2];
+    if (!(area2 > 0.0f)) return m;
+    m.gb = glm::cross(c - a, n) / area2;
+    m.gc = glm::cross(n, b - a) / area2;
+    m.du = uv[1] - uv[0];
+    m.dv = uv[2] - uv[0];
+    return m;
+}
+
+bool lightmap_uv(const RayScene& rays, const ObjectLightmap& map, const SurfaceHit& hit, vec2* uv) {
+    if (hit.primitive < 0 || size_t(hit.primitive) * 3 + 2 >= map.triangle_uv.size()) return false;
+    *uv = triangle_to_texels(rays, map, size_t(hit.primitive)).uv(hit.position);
     return true;
 }
 

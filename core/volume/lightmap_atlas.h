@@ -60,6 +60,19 @@ struct AtlasSettings {
 // Objects are placed at time 0. Throws nothing; objects without a lightmap are skipped.
 std::vector<ObjectLightmap> build_lightmaps(const RayScene& scene, const AtlasSettings& settings);
 
+// A triangle's world -> lightmap affine map (the instance at time 0): uv = t0 + ((p - a) . gb) du
+// + ((p - a) . gc) dv, barycentrics by scalar triple products. Degenerate triangles map every
+// point to their first corner.
+struct TriangleToTexels {
+    vec3 a{0.0f}, gb{0.0f}, gc{0.0f};
+    vec2 t0{0.0f}, du{0.0f}, dv{0.0f};
+    vec2 uv(const vec3& p) const {
+        const vec3 q = p - a;
+        return t0 + glm::dot(q, gb) * du + glm::dot(q, gc) * dv;
+    }
+};
+// Triangle `t` of `map`'s object (t < map.triangle_uv.size() / 3).
+TriangleToTexels triangle_to_texels(const RayScene& rays, const ObjectLightmap& map, size_t t);
 // A surface point's lightmap coordinates (texels) in `map`; false when the hit is not on one
 // of the map's triangles.
 bool lightmap_uv(const RayScene& rays, const ObjectLightmap& map, const SurfaceHit& hit, vec2* uv);

@@ -86,8 +86,8 @@ void LightmapBaker::reset() {
 
 void LightmapBaker::run_pass(int samples, Progress* progress) {
     const auto t0 = Clock::now();
-    if (samples_ == 0 && method_ == BakeMethod::Impulse && settings_.vertex_corrections &&
-        settings_.lit_medium_depth >= 0 && tables_ && !media_.empty() && !corrections_) {
+    if (samples_ == 0 && !corrections_ &&
+        uses_vertex_corrections(method_, settings_, tables_, media_)) {
         // Before the first path: deeper vertices read it (volume/vertex_corrections.h).
         corrections_ =
             std::make_unique<VertexCorrectionField>(scene_, media_, tables_, settings_, maps_);

@@ -22,13 +22,19 @@ constexpr int kFieldStride = 2;
 constexpr double kFieldPathFraction = 0.5;
 }  // namespace
 
+bool uses_vertex_corrections(BakeMethod method, const BakeSettings& settings,
+                             const ImpulseTables* tables, const Media& media) {
+    return method == BakeMethod::Impulse && settings.vertex_corrections &&
+           settings.lit_medium_depth >= 0 && tables && !media.empty();
+}
+
 VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& media,
                                              const ImpulseTables* tables,
                                              const BakeSettings& settings,
                                              const std::vector<ObjectLightmap>& maps)
     : maps_(&maps) {
-    // The texel's own Monte Carlo terms of its emitters, on every path: no bounces (surface
-    // light's scattering is the texel walk's, at the texel only).
+    // The texels' own Monte Carlo terms, on every path (set_field_prepass: no indirect segment
+    // at the texel; the walk's surface light filed apart).
     BakeSettings pre = settings;
     pre.texel_mc_rate = 1.0f;
     BakeEstimator estimator(rays, media, tables, BakeMethod::Impulse, pre);
@@ -48,7 +54,9 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
     for (size_t mi = 0; mi < maps.size(); ++mi) {
         const ObjectLightmap& map = maps[mi];
         map_of_object_[size_t(map.object)] = int(mi);
-        set_triangles(rays, map, triangles_[mi]);
+        triangles_[mi].resize(map.triangle_uv.size() / 3);
+        for (size_t t = 0; t < triangles_[mi].size(); ++t)
+            triangles_[mi][t] = triangle_to_texels(rays, map, t);
         const size_t n = map.texels.size();
         std::vector<IrradianceParts> deferred(n);
         std::vector<char> done(n, 0);
@@ -118,40 +126,13 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
     rays_ = rays_cast;
 }
 
-void VertexCorrectionField::set_triangles(const RayScene& rays, const ObjectLightmap& map,
-                                          std::vector<TriangleToTexels>& out) {
-    const SceneObject& obj = rays.scene().objects[size_t(map.object)];
-    const mat4& to_world = rays.object_to_world(map.object);
-    out.assign(map.triangle_uv.size() / 3, TriangleToTexels{});
-    for (size_t t = 0; t < out.size(); ++t) {
-        // The instance at time 0, as the atlas (lightmap_uv).
-        const uvec3 tri = obj.mesh->triangles[t];
-        const vec3 a = vec3(to_world * vec4(obj.mesh->positions[tri.x], 1.0f));
-        const vec3 b = vec3(to_world * vec4(obj.mesh->positions[tri.y], 1.0f));
-        const vec3 c = vec3(to_world * vec4(obj.mesh->positions[tri.z], 1.0f));
-        const vec3 n = glm::cross(b - a, c - a);
-        const float area2 = glm::dot(n, n);
-        if (!(area2 > 0.0f)) continue;  // degenerate: every lookup reads t0 = its corner
-        TriangleToTexels& m = out[t];
-        m.a = a;
-        m.gb = glm::cross(c - a, n) / area2;
-        m.gc = glm::cross(n, b - a) / area2;
-        const vec2* uv = &map.triangle_uv[t * 3];
-        m.t0 = uv[0];
-        m.du = uv[1] - uv[0];
-        m.dv = uv[2] - uv[0];
-    }
-}
-
 bool VertexCorrectionField::at(const SurfaceHit& hit, bool with_surface_light, vec3* out) const {
     if (!maps_ || hit.object < 0 || size_t(hit.object) >= map_of_object_.size()) return false;
     const int mi = map_of_object_[size_t(hit.object)];
     if (mi < 0) return false;
     const std::vector<TriangleToTexels>& tris = triangles_[size_t(mi)];
     if (hit.primitive < 0 || size_t(hit.primitive) >= tris.size()) return false;
-    const TriangleToTexels& m = tris[size_t(hit.primitive)];
-    const vec3 q = hit.position - m.a;
-    const vec2 uv = m.t0 + glm::dot(q, m.gb) * m.du + glm::dot(q, m.gc) * m.dv;
+    const vec2 uv = tris[size_t(hit.primitive)].uv(hit.position);
     // The nearest texel (dilated past the chart's edge): one cache line, where a bilinear
     // read of four cost 5 % of a smoke_room bake; the field is a noisy, unfiltered estimate
     // that deeper vertices integrate over what they see, so its interpolation buys nothing.

@@ -42,6 +42,11 @@ namespace freqlab {
 class ImpulseTables;
 class Media;
 struct BakeSettings;
+enum class BakeMethod;
+
+// Whether a bake of `method` with these settings builds and reads the field.
+bool uses_vertex_corrections(BakeMethod method, const BakeSettings& settings,
+                             const ImpulseTables* tables, const Media& media);
 
 class VertexCorrectionField {
   public:
@@ -63,16 +68,9 @@ class VertexCorrectionField {
     long rays() const { return rays_; }
 
   private:
-    // A triangle's world -> lightmap affine map: uv = t0 + ((p - a) . gb) du + ((p - a) . gc) dv
-    // (barycentrics by scalar triple products, precomputed: a lookup is ~30 flops).
-    struct TriangleToTexels {
-        vec3 a{0.0f}, gb{0.0f}, gc{0.0f};
-        vec2 t0{0.0f}, du{0.0f}, dv{0.0f};
-    };
     const std::vector<ObjectLightmap>* maps_ = nullptr;
     std::vector<std::vector<TriangleToTexels>> triangles_;  // per map, per mesh triangle
-    static void set_triangles(const RayScene& rays, const ObjectLightmap& map,
-                              std::vector<TriangleToTexels>& out);
+    // (precomputed: a lookup is ~30 flops)
     std::vector<int> map_of_object_;
     std::vector<std::vector<float>> values_;
     int paths_ = 0;
