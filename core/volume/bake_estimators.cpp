@@ -1091,12 +1091,13 @@ void BakeEstimator::add_walk_surface_light(const SurfaceHit& hit, int chain, con
 IrradianceParts BakeEstimator::vertex_irradiance(const SurfaceHit& hit, const vec3& albedo,
                                                  int depth, CounterRng& rng, BakeCounters& counters,
                                                  IrradianceParts* deferred) const {
-    vec3 correction(0.0f);
-    const bool corrected = corrections_ && scatters_ && depth > settings_.lit_medium_depth &&
-                           corrections_->at(hit, depth < settings_.bounces, &correction);
+    VertexCorrectionField::Texel field;
+    if (corrections_ && scatters_ && depth > settings_.lit_medium_depth)
+        field = corrections_->locate(hit);
     IrradianceParts parts = surface_path(hit.position, hit.shading_normal, albedo, depth, rng,
-                                         counters, nullptr, deferred, corrected);
-    parts.single += correction;
+                                         counters, nullptr, deferred, field.found());
+    // Read after the vertex's own path, which hides the read's cache miss.
+    if (field.found()) parts.single += field.value(depth < settings_.bounces);
     return parts;
 }
 

@@ -78,11 +78,7 @@ DensityGrid::DensityGrid(vec3 box_min, vec3 box_max, ivec3 resolution, std::vect
 }
 
 double DensityGrid::integral(const vec3& o, const vec3& d, double t_begin, double t_end) const {
-    if (line_axis_ < 0) {
-        double sum = 0.0;
-        march(o, d, t_begin, t_end, [&](double a, double b, float v) { sum += (b - a) * v; });
-        return sum;
-    }
+    if (line_axis_ < 0) return integral_by_jumps(o, d, t_begin, t_end);
     double ta = t_begin, tb = t_end;
     if (!clip_to_box(min_, max_corner_, o, d, &ta, &tb)) return 0.0;
     const int a = line_axis_;
@@ -98,6 +94,70 @@ double DensityGrid::integral(const vec3& o, const vec3& d, double t_begin, doubl
         return prefix_[size_t(c)] + line_[size_t(c)] * (z - (base + c * size));
     };
     return std::abs(prefix(z1, c1) - prefix(z0, c0)) / std::abs(double(d[a]));
+}
+
+double DensityGrid::integral_by_jumps(const vec3& o, const vec3& d, double t_begin,
+                                      double t_end) const {
+    double ta = t_begin, tb = t_end;
+    if (!clip_to_box(min_, max_corner_, o, d, &ta, &tb)) return 0.0;
+    // The density along the ray, f(t), is constant between voxel faces; with J_c its jump
+    // f(t_c+) - f(t_c-) where the ray crosses a face at t_c, integration by parts gives
+    //   int_ta^tb f = (tb - ta) f(tb-) - sum_c (t_c - ta) J_c.
+    // Each crossing is independent of the others: its time is that of its plane, its two
+    // voxels the cells of the other axes at that time. A DDA instead finds each next crossing
+    // from the last, a dependency chain: 7.5 ns a voxel on smoke_room's grid against 4.5 ns a
+    // crossing here, where the crossings of one axis pipeline (the loop is bound by its
+    // instruction count: a second sum or a cheaper floor measured no faster). Same sum up to
+    // the float rounding of the box's faces (test Media.GridIntegralByJumpsIsTheMarchedSum).
+    const glm::dvec3 u0 = (glm::dvec3(o) - glm::dvec3(min_)) / glm::dvec3(march_voxel_);
+    const glm::dvec3 du = glm::dvec3(d) / glm::dvec3(march_voxel_);
+    const ivec3 res = march_res_, padded = march_res_ + 2;
+    const long axis_stride[3] = {1, long(padded.x), long(padded.x) * padded.y};
+    const float* voxels = march_voxels_.data();
+    // Cells -1 and res are the empty border: where float rounding puts the box's faces past
+    // the voxels' (march() does the same).
+    auto cell = [&](double t, int a) {
+        return std::clamp(int(std::floor(u0[a] + t * du[a])), -1, res[a]);
+    };
+    const double margin = 1e-9 * (tb - ta);
+    ivec3 first, last;
+    for (int a = 0; a < 3; ++a) {
+        first[a] = cell(ta + margin, a);
+        last[a] = cell(tb - margin, a);
+    }
+    auto index = [&](int x, int y, int z) {
+        return (x + 1) * axis_stride[0] + (y + 1) * axis_stride[1] + (z + 1) * axis_stride[2];
+    };
+    double sum = (tb - ta) * double(voxels[index(last.x, last.y, last.z)]);
+    for (int a = 0; a < 3; ++a) {
+        const int n = std::abs(last[a] - first[a]);
+        if (n == 0) continue;
+        const int b = (a + 1) % 3, c = (a + 2) % 3;
+        const int step = last[a] > first[a] ? 1 : -1;
+        // Plane q (between cells q - 1 and q) is crossed from the cell before to the one after;
+        // the k-th crossing's time and the other axes' coordinates are linear in k.
+        const int q0 = step > 0 ? first[a] + 1 : first[a];
+        const double t0 = (double(q0) - u0[a]) / du[a], dt = double(step) / du[a];
+        const double ub = u0[b] + t0 * du[b], dub = dt * du[b];
+        const double uc = u0[c] + t0 * du[c], duc = dt * du[c];
+        const int res_b = res[b], res_c = res[c];
+        const long stride_b = axis_stride[b], stride_c = axis_stride[c];
+        const long before_offset = step > 0 ? -axis_stride[a] : 0;
+        const long after_offset = step > 0 ? 0 : -axis_stride[a];
+        const long base0 = (q0 + 1) * axis_stride[a] + stride_b + stride_c;
+        const long dbase = step * axis_stride[a];
+        double jumps = 0.0;
+        for (int k = 0; k < n; ++k) {
+            const double kd = double(k);
+            const int cb = std::clamp(int(std::floor(ub + kd * dub)), -1, res_b);
+            const int cc = std::clamp(int(std::floor(uc + kd * duc)), -1, res_c);
+            const long base = base0 + k * dbase + cb * stride_b + cc * stride_c;
+            jumps += (t0 + kd * dt - ta) *
+                     double(voxels[base + after_offset] - voxels[base + before_offset]);
+        }
+        sum -= jumps;
+    }
+    return sum;
 }
 
 float DensityGrid::at(const vec3& p) const {

@@ -46,6 +46,8 @@ class DensityGrid {
     // The integral of the density over [t_begin, t_end]: march() summed, or, for a grid that
     // varies along one axis only (a height-fog ramp), in O(1) from prefix sums along it.
     double integral(const vec3& o, const vec3& d, double t_begin, double t_end) const;
+    // The same for any grid, from the density's jumps at the voxel faces (media.cpp).
+    double integral_by_jumps(const vec3& o, const vec3& d, double t_begin, double t_end) const;
 
   private:
     vec3 min_, max_corner_, voxel_;

@@ -2,6 +2,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include <glm/gtc/packing.hpp>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -48,7 +50,7 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
         1,
         int(std::ceil(double(settings.spp) * settings.texel_mc_rate * kFieldPathFraction - 1e-9)));
     map_of_object_.assign(rays.scene().objects.size(), -1);
-    values_.resize(maps.size());
+    packed_.resize(maps.size());
     triangles_.resize(maps.size());
     std::atomic<long> rays_cast{0};
     for (size_t mi = 0; mi < maps.size(); ++mi) {
@@ -106,8 +108,7 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
             deferred[i].single = mean.single * inv;
             deferred[i].multiple = mean.multiple * inv;
         }
-        std::vector<float>& v = values_[mi];
-        v.assign(n * 6, 0.0f);
+        std::vector<float> v(n * 6, 0.0f);
         for (size_t i = 0; i < n; ++i) {
             const vec3 emitters = (deferred[i].single + deferred[i].multiple) / float(paths_);
             const vec3 surface = deferred[i].surface / float(paths_);
@@ -122,26 +123,52 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
         }
         // Lookups near a chart's edge may land on the ring outside it.
         dilate(map, v, 6, 2);
+        PackedMap& packed = packed_[mi];
+        packed.width = map.width;
+        packed.height = map.height;
+        for (float x : v) packed.scale = std::max(packed.scale, std::abs(x));
+        const float inv = packed.scale > 0.0f ? 1.0f / packed.scale : 0.0f;
+        packed.halves.resize(v.size());
+        for (size_t k = 0; k < v.size(); ++k) packed.halves[k] = glm::packHalf1x16(v[k] * inv);
     }
     rays_ = rays_cast;
 }
 
-bool VertexCorrectionField::at(const SurfaceHit& hit, bool with_surface_light, vec3* out) const {
-    if (!maps_ || hit.object < 0 || size_t(hit.object) >= map_of_object_.size()) return false;
+VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit) const {
+    Texel texel;
+    if (!maps_ || hit.object < 0 || size_t(hit.object) >= map_of_object_.size()) return texel;
     const int mi = map_of_object_[size_t(hit.object)];
-    if (mi < 0) return false;
+    if (mi < 0) return texel;
     const std::vector<TriangleToTexels>& tris = triangles_[size_t(mi)];
-    if (hit.primitive < 0 || size_t(hit.primitive) >= tris.size()) return false;
+    if (hit.primitive < 0 || size_t(hit.primitive) >= tris.size()) return texel;
     const vec2 uv = tris[size_t(hit.primitive)].uv(hit.position);
     // The nearest texel (dilated past the chart's edge): one cache line, where a bilinear
     // read of four cost 5 % of a smoke_room bake; the field is a noisy, unfiltered estimate
     // that deeper vertices integrate over what they see, so its interpolation buys nothing.
-    const ObjectLightmap& map = (*maps_)[size_t(mi)];
+    const PackedMap& map = packed_[size_t(mi)];
     const int x = std::clamp(int(uv.x), 0, map.width - 1);
     const int y = std::clamp(int(uv.y), 0, map.height - 1);
-    const float* p = values_[size_t(mi)].data() + (size_t(y) * size_t(map.width) + size_t(x)) * 6;
-    *out = vec3(p[0], p[1], p[2]);
-    if (with_surface_light && surface_light_) *out += vec3(p[3], p[4], p[5]);
+    texel.halves_ = map.halves.data() + (size_t(y) * size_t(map.width) + size_t(x)) * 6;
+    texel.scale_ = map.scale;
+    texel.surface_light_ = surface_light_;
+    __builtin_prefetch(texel.halves_);
+    return texel;
+}
+
+vec3 VertexCorrectionField::Texel::value(bool with_surface_light) const {
+    auto rgb = [](const uint16_t* h) {
+        return vec3(glm::unpackHalf1x16(h[0]), glm::unpackHalf1x16(h[1]),
+                    glm::unpackHalf1x16(h[2]));
+    };
+    vec3 v = rgb(halves_);
+    if (with_surface_light && surface_light_) v += rgb(halves_ + 3);
+    return v * scale_;
+}
+
+bool VertexCorrectionField::at(const SurfaceHit& hit, bool with_surface_light, vec3* out) const {
+    const Texel texel = locate(hit);
+    if (!texel.found()) return false;
+    *out = texel.value(with_surface_light);
     return true;
 }
 
