@@ -48,7 +48,9 @@ Mean scattered_mean(const BakeEstimator& e, vec3 p, int paths, uint64_t key, boo
     for (int i = 0; i < paths; ++i) {
         CounterRng rng(3, key, 0, uint64_t(i));
         const IrradianceParts parts = e.estimate(p, vec3(0, 0, 1), vec3(0.5f), rng, counters);
-        if (umbra) EXPECT_EQ(parts.surface, vec3(0.0f)) << "not in the umbra";
+        if (umbra) {
+            EXPECT_EQ(parts.surface, vec3(0.0f)) << "not in the umbra";
+        }
         const double v = luminance(multiple ? parts.multiple : parts.single);
         s += v;
         s2 += v * v;

@@ -3,6 +3,7 @@
 // clipping against closed forms, and bad input that must name the field.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -249,6 +250,41 @@ TEST(Media, ForcedCollisionsAreTheConditionedLawWeightedByItsProbability) {
         }
         const double mean = sum / n, sd = std::sqrt(std::max(0.0, sum2 / n - mean * mean) / n);
         EXPECT_NEAR(mean, 1.0 - m.transmittance(o, d, s), 4.5 * sd + 1e-9) << "s = " << s;
+    }
+}
+
+// With one medium the conditioned law is inverted: every draw collides, with weight P, and
+// the law is the same (the collision point's density and coefficients are those at it).
+TEST(Media, ForcedCollisionsInOneMediumInvertTheConditionedLaw) {
+    const Media m(media_from(R"([
+        {"sigma_s": 0.3, "sigma_a": 0.1, "g": 0.4,
+         "bounds": {"box": {"min": [0,-1,-1], "max": [2,1,1]}},
+         "density": {"source": "brushes", "resolution": [16, 8, 8],
+                     "brushes": [{"shape": "ellipsoid", "center": [1,0,0], "size": [1.6,1.6,1.6]}]}}])"));
+    const vec3 o(-0.5f, 0.05f, 0.02f), d(1, 0, 0);
+    const double t_max = 3.0, p = 1.0 - m.transmittance(o, d, t_max);
+    const int n = 40000;
+    std::vector<double> ts;
+    for (int i = 0; i < n; ++i) {
+        CounterRng rng(12, 0, uint64_t(i), 0);
+        double weight = -1.0;
+        const MediumCollision c = m.sample_forced_collision(o, d, t_max, rng, 4, &weight);
+        ASSERT_TRUE(c.happened) << i;
+        ASSERT_EQ(weight, p);
+        ASSERT_LT(c.t, t_max);
+        const HomogeneousMedium at = m.at(o + d * float(c.t));
+        ASSERT_NEAR(c.sigma_t, at.sigma_t(), 1e-6 * at.sigma_t() + 1e-9) << c.t;
+        ASSERT_GT(c.sigma_t, 0.0);
+        ASSERT_EQ(c.g, 0.4);
+        ts.push_back(c.t);
+    }
+    // P(t < s | collision) = (1 - T(s)) / P: binomial, 4.5 sigma.
+    for (double s : {0.4, 0.8, 1.2, 1.6, 2.2}) {
+        const double expected = (1.0 - m.transmittance(o, d, s)) / p;
+        const double share =
+            double(std::count_if(ts.begin(), ts.end(), [&](double t) { return t < s; })) / n;
+        EXPECT_NEAR(share, expected, 4.5 * std::sqrt(expected * (1.0 - expected) / n) + 1e-9)
+            << "s = " << s;
     }
 }
 

@@ -384,6 +384,38 @@ SegmentOptics Media::track(const vec3& o, const vec3& d, double t_max, CounterRn
     return s;
 }
 
+bool Media::collide(const Entry& e, const vec3& o, const vec3& d, double t0, double t1,
+                    double target, MediumCollision* out) const {
+    const double sigma_t = e.desc.sigma_s + e.desc.sigma_a;
+    const double k = sigma_t * e.desc.density_scale;
+    if (!(k > 0.0)) return false;
+    double hit = -1.0, density = 1.0;
+    if (e.grid) {
+        double acc = 0.0;
+        // Stops at the voxel where the thickness is reached.
+        e.grid->march(o, d, t0, t1, [&](double a, double b, float v) {
+            if (v <= 0.0f) return true;
+            const double tau = (b - a) * v * k;
+            if (acc + tau < target) {
+                acc += tau;
+                return true;
+            }
+            hit = a + (target - acc) / (v * k);
+            density = v;
+            return false;
+        });
+    } else if ((t1 - t0) * k >= target) {
+        hit = t0 + target / k;
+    }
+    if (hit < 0.0) return false;
+    out->happened = true;
+    out->t = hit;
+    out->sigma_t = sigma_t * density * e.desc.density_scale;
+    out->sigma_s = e.desc.sigma_s * density * e.desc.density_scale;
+    out->g = e.desc.g;
+    return true;
+}
+
 MediumCollision Media::sample_collision(const vec3& o, const vec3& d, double t_max,
                                         CounterRng& rng) const {
     MediumCollision best;
@@ -391,34 +423,11 @@ MediumCollision Media::sample_collision(const vec3& o, const vec3& d, double t_m
     for (const Entry& e : media_) {
         // One uniform per medium whether or not it is crossed: the stream stays aligned.
         const double target = -std::log1p(-rng.next_double());
-        const double sigma_t = e.desc.sigma_s + e.desc.sigma_a;
         double t0, t1;
-        if (sigma_t <= 0.0 || !clip(e, o, d, std::min(t_max, best.t), &t0, &t1)) continue;
-        const double k = sigma_t * e.desc.density_scale;
-        if (k <= 0.0) continue;
-        double hit = -1.0, density = 1.0;
-        if (e.grid) {
-            double acc = 0.0;
-            e.grid->march(o, d, t0, t1, [&](double a, double b, float v) {
-                if (hit >= 0.0 || v <= 0.0f) return;
-                const double tau = (b - a) * v * k;
-                if (acc + tau >= target) {
-                    hit = a + (target - acc) / (v * k);
-                    density = v;
-                } else {
-                    acc += tau;
-                }
-            });
-        } else if ((t1 - t0) * k >= target) {
-            hit = t0 + target / k;
-        }
-        if (hit >= 0.0 && hit < best.t) {
-            best.happened = true;
-            best.t = hit;
-            best.sigma_t = sigma_t * density * e.desc.density_scale;
-            best.sigma_s = e.desc.sigma_s * density * e.desc.density_scale;
-            best.g = e.desc.g;
-        }
+        MediumCollision c;
+        if (clip(e, o, d, std::min(t_max, best.t), &t0, &t1) &&
+            collide(e, o, d, t0, t1, target, &c) && c.t < best.t)
+            best = c;
     }
     return best;
 }
@@ -428,6 +437,19 @@ MediumCollision Media::sample_forced_collision(const vec3& o, const vec3& d, dou
     *weight = 0.0;
     const double p = 1.0 - transmittance(o, d, t_max);
     if (!(p > 0.0)) return {};
+    if (media_.size() == 1) {
+        // One medium: the conditioned law inverted at once, T(t) = 1 - u P (weight P, one
+        // uniform, one walk to the collision; thin haze needed ~3 tries of a whole walk).
+        const double target = -std::log1p(-rng.next_double() * p);
+        double t0, t1;
+        MediumCollision c;
+        if (target > 0.0 && clip(media_[0], o, d, t_max, &t0, &t1) &&
+            collide(media_[0], o, d, t0, t1, target, &c)) {
+            *weight = p;
+            return c;
+        }
+        return {};  // u P rounded to 0, or the thickness short of target by rounding
+    }
     for (int k = 0; k < tries; ++k) {
         const MediumCollision c = sample_collision(o, d, t_max, rng);
         if (c.happened) {

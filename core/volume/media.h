@@ -23,6 +23,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <type_traits>
 #include <vector>
 
 #include "math/rng.h"
@@ -40,7 +41,8 @@ class DensityGrid {
     vec3 box_max() const { return max_corner_; }
     ivec3 resolution() const { return res_; }
     const std::vector<float>& voxels() const { return voxels_; }
-    // Calls fn(t0, t1, density) for the voxel runs the ray crosses inside [t_begin, t_end].
+    // Calls fn(t0, t1, density) for the voxel runs the ray crosses inside [t_begin, t_end];
+    // an fn that returns bool stops the walk by returning false.
     template <class Fn>
     void march(const vec3& o, const vec3& d, double t_begin, double t_end, Fn&& fn) const;
     // The integral of the density over [t_begin, t_end]: march() summed, or, for a grid that
@@ -119,11 +121,12 @@ class Media {
     // The first real collision before t_max (none: happened = false), exact in distribution.
     MediumCollision sample_collision(const vec3& o, const vec3& d, double t_max,
                                      CounterRng& rng) const;
-    // A collision before t_max given that one happens (a forced collision): up to `tries`
-    // draws of sample_collision, the first that collides kept. *weight is P / Q, where
-    // P = 1 - T(t_max) is the probability of a collision and Q = 1 - (1 - P)^tries that of
-    // finding one: E[weight f(t); found] = P E[f(t) | collision], unbiased. Not found (or no
-    // medium): happened = false, *weight = 0.
+    // A collision before t_max given that one happens (a forced collision), weighted so that
+    // E[weight f(t); found] = P E[f(t) | collision], P = 1 - T(t_max) the probability of a
+    // collision. One medium: the conditioned law inverted (T(t) = 1 - u P), weight P. Several:
+    // up to `tries` draws of sample_collision, the first that collides kept, weight P / Q
+    // with Q = 1 - (1 - P)^tries the probability of finding one. Not found (or no medium):
+    // happened = false, *weight = 0.
     MediumCollision sample_forced_collision(const vec3& o, const vec3& d, double t_max,
                                             CounterRng& rng, int tries, double* weight) const;
     // Where the ray leaves the last bounded medium it crosses; infinity when a medium fills
@@ -141,6 +144,10 @@ class Media {
         std::shared_ptr<const DensityGrid> grid;  // null: constant density inside bounds
     };
     // The part of [0, t_max] inside medium e's bounds; false when none.
+    // Where in [t0, t1] medium e's optical thickness from t0 reaches `target` (> 0): false
+    // when it does not; else *out holds that point's collision.
+    bool collide(const Entry& e, const vec3& o, const vec3& d, double t0, double t1, double target,
+                 MediumCollision* out) const;
     bool clip(const Entry& e, const vec3& o, const vec3& d, double t_max, double* t0,
               double* t1) const;
     std::vector<Entry> media_;
@@ -187,7 +194,11 @@ void DensityGrid::march(const vec3& o, const vec3& d, double t_begin, double t_e
         const double t_xy = std::min(tx, ty), t_axis = std::min(t_xy, tz);
         if (t_axis >= tb) break;
         const bool x = tx == t_axis, y = !x && ty == t_axis, z = !x && !y;
-        fn(t, t_axis, voxels[index]);
+        if constexpr (std::is_same_v<std::invoke_result_t<Fn&, double, double, float>, bool>) {
+            if (!fn(t, t_axis, voxels[index])) return;
+        } else {
+            fn(t, t_axis, voxels[index]);
+        }
         t = t_axis;
         index += x ? stride[0] : (y ? stride[1] : stride[2]);
         tx += x ? t_delta[0] : 0.0;
