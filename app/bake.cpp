@@ -108,6 +108,14 @@ void print_debug_texel(const RayScene& rays, const Media& media, const ImpulseTa
             estimator.set_vertex_corrections(baker.vertex_corrections() ? baker.vertex_corrections()
                                                                         : own_field.get());
         }
+        if (const VertexCorrectionField* field = estimator.vertex_corrections()) {
+            const auto here = field->at_texel(lightmap_index, size_t(y) * map->width + x);
+            const float emitters = luminance(here.value(false));
+            std::printf(
+                "  %-10s field here (what deeper vertices landing here add): emitters' "
+                "terms %g, with surface light %g\n",
+                "", emitters, luminance(here.value(true)));
+        }
         const IrradianceParts mean =
             texel_estimate(estimator, baker.lightmaps(), lightmap_index, size_t(y) * map->width + x,
                            settings.seed, settings.spp);

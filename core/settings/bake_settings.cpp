@@ -89,6 +89,15 @@ const SettingsSchema& BakeSettings::schema() {
                     "geometry, hidden surfaces included; tables: the indirect segment's vertex "
                     "as an area emitter in the tables' infinite medium, with a control variate "
                     "and hidden_surface_light (a grazing vertex weighs d^2 / cos: fireflies).")
+            .field(&BakeSettings::surface_light_mis, "surface_light_mis", 0, 1, "",
+                   kInvalidatesBake,
+                   "Impulse, texel_surface_light = walk: the light of surfaces lit by point "
+                   "lights also comes by light tracing: at each of the walk's scattering points, "
+                   "one ray from every point light finds a lit point, connected to the "
+                   "scattering point (2 rays), weighted against the walk landing there "
+                   "(multiple importance sampling, power heuristic; unbiased). Without it the "
+                   "hot spot next to a point light arrives only when a walk lands on it: "
+                   "fireflies.")
             .field(&BakeSettings::vertex_corrections, "vertex_corrections", 0, 1, "",
                    kInvalidatesBake,
                    "Impulse: path vertices deeper than lit_medium_depth take the texels' Monte "

@@ -33,6 +33,9 @@ struct BakeSettings {
     bool single_correction = true;
     TexelMultiple texel_multiple = TexelMultiple::Walk;
     TexelSurfaceLight texel_surface_light = TexelSurfaceLight::Walk;
+    // Impulse, texel_surface_light = walk: point-lit surfaces' light also by light tracing,
+    // MIS-weighted against the walk's landing (volume/bake_surface_light.cpp).
+    bool surface_light_mis = true;
     // Impulse: deeper path vertices read the texels' Monte Carlo terms of their emitters,
     // estimated before the bake (volume/vertex_corrections.h).
     bool vertex_corrections = true;

@@ -981,6 +981,9 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
     int chain = 0;      // scattering events since the last surface vertex
     int category = -1;  // fixed at the first surface vertex: 0 surface, 1 single, 2 multiple
     int surface_vertices = 0, events = 0;
+    WalkScatter last;  // the last scattering event (texel walks' surface light)
+    const bool point_lit_mis =
+        media_multiple_only && texel->surface_light_depth >= 0 && surface_light_mis();
     auto add = [&](int cat, const vec3& v) {
         (cat == 0 ? parts.surface : cat == 1 ? parts.single : parts.multiple) += v;
     };
@@ -1027,11 +1030,18 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
                 add(cat, throughput * s.irradiance * phase *
                              float(media_.transmittance(x, s.dir, length)));
             }
+            const float survive =
+                events >= 4
+                    ? std::min(1.0f,
+                               std::max(throughput.x, std::max(throughput.y, throughput.z)) / kPi)
+                    : 1.0f;
+            last = WalkScatter{x, dir, c.g, survive};
+            if (point_lit_mis)
+                (chain == 1 ? texel->surface_light->single : texel->surface_light->multiple) +=
+                    throughput * point_lit_surface_light(last, rng, counters);
             dir = sample_hg_direction(float(c.g), dir, rng.next_float(), rng.next_float());
             pos = x;
             if (events >= 4) {
-                const float survive = std::min(
-                    1.0f, std::max(throughput.x, std::max(throughput.y, throughput.z)) / kPi);
                 if (rng.next_float() >= survive) break;
                 throughput /= survive;
             }
@@ -1039,7 +1049,7 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
         }
         if (media_multiple_only) {
             if (hit.valid && chain > 0 && texel->surface_light_depth >= 0)
-                add_walk_surface_light(hit, chain, throughput, *texel, rng, counters);
+                add_walk_surface_light(hit, chain, throughput, *texel, last, rng, counters);
             break;
         }
         if (!hit.valid) break;
@@ -1071,21 +1081,6 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
         pos = origin(hit.position, ny);
     }
     return parts;
-}
-
-void BakeEstimator::add_walk_surface_light(const SurfaceHit& hit, int chain, const vec3& throughput,
-                                           const TexelWalk& texel, CounterRng& rng,
-                                           BakeCounters& counters) const {
-    // The walk scattered `chain` times since the texel and reached y: y's radiance towards it,
-    // a diffuse vertex of the surface path (the same estimate an indirect segment takes).
-    const Material& material = scene_.scene().materials[size_t(hit.material)];
-    if (material.type == BrdfType::Mirror) return;
-    const vec3 albedo_y = material.albedo.eval(hit.uv);
-    if (glm::all(glm::equal(albedo_y, vec3(0.0f)))) return;
-    const IrradianceParts at_y =
-        vertex_irradiance(hit, albedo_y, texel.surface_light_depth, rng, counters);
-    const vec3 arriving = throughput * albedo_y * kInvPi * at_y.total();
-    (chain == 1 ? texel.surface_light->single : texel.surface_light->multiple) += arriving;
 }
 
 IrradianceParts BakeEstimator::vertex_irradiance(const SurfaceHit& hit, const vec3& albedo,

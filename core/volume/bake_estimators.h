@@ -296,10 +296,33 @@ class BakeEstimator {
     // (TexelWalk; no emitter's single scattering is gathered).
     IrradianceParts walk(vec3 pos, vec3 dir, vec3 throughput, CounterRng& rng,
                          BakeCounters& counters, const TexelWalk* texel = nullptr) const;
-    // walk's TexelWalk surface light at the surface it ends on.
+    // The walk's last scattering event (bake_surface_light.cpp).
+    struct WalkScatter {
+        vec3 x{0.0f}, dir_in{0.0f};  // where, and the walk's direction of travel arriving there
+        double g = 0.0;
+        float survive = 1.0f;  // the roulette's chance that the walk's next segment is traced
+    };
+    // walk's TexelWalk surface light at the surface it ends on, coming from the scattering
+    // event `from`; with bake.surface_light_mis, less the share of point-lit light that
+    // point_lit_surface_light takes.
     void add_walk_surface_light(const SurfaceHit& hit, int chain, const vec3& throughput,
-                                const TexelWalk& texel, CounterRng& rng,
+                                const TexelWalk& texel, const WalkScatter& from, CounterRng& rng,
                                 BakeCounters& counters) const;
+    // bake.surface_light_mis: the light of surfaces lit by point lights scattered at `at`
+    // towards the walk's origin, by light tracing (one ray from each point light), weighted
+    // against the walk's own landing on the same point (power heuristic).
+    vec3 point_lit_surface_light(const WalkScatter& at, CounterRng& rng,
+                                 BakeCounters& counters) const;
+    // The point light's irradiance at y (shading normal ns) and the densities of y under
+    // light tracing from it and under the walk from `from` (area measure); false when the
+    // light does not reach y's side.
+    struct PointLitPoint {
+        vec3 irradiance{0.0f};
+        double light_pdf = 0.0, walk_pdf = 0.0;
+    };
+    bool point_lit_point(const Light& light, const SurfaceHit& y, const WalkScatter& from,
+                         bool check_visibility, BakeCounters& counters, PointLitPoint* out) const;
+    bool surface_light_mis() const;
     // Light of the scene's point lights scattered once anywhere on the segment o + t d,
     // t < t_max, towards o: equiangular sampling, since collision-point NEE to a point light
     // has infinite variance in a medium (1/r^2 near the light).

@@ -4,11 +4,13 @@
 // free-flight sampling for the volumetric path tracer.
 //
 // Grids are piecewise constant per voxel (the value at the voxel centre), so every quantity
-// along a ray is exact: a 3D DDA visits the voxels and sums density x length ("exact ray
-// marching of the grid"); a grid that varies along one axis only (height fog) is integrated in
-// O(1) from prefix sums along that axis. Free flights invert the optical thickness exactly (regular
-// tracking); several media superpose, and the first collision in their sum is the nearest of
-// the per-medium first collisions (competing exponentials), so each is sampled on its own.
+// along a ray is exact: the density integral sums its jumps at the voxel faces the ray crosses
+// (each crossing independent of the others: integral_by_jumps), a grid that varies along one
+// axis only (height fog) is integrated in O(1) from prefix sums along that axis, and a 3D DDA
+// visits the voxels in order where the order matters (free flights). Free flights invert the
+// optical thickness exactly (regular tracking); several media superpose, and the first collision in
+// their sum is the nearest of the per-medium first collisions (competing exponentials), so each is
+// sampled on its own.
 //
 // | quantity              | definition                                                     |
 // |-----------------------|----------------------------------------------------------------|

@@ -155,6 +155,15 @@ VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit
     return texel;
 }
 
+VertexCorrectionField::Texel VertexCorrectionField::at_texel(size_t map, size_t texel) const {
+    Texel t;
+    if (map >= packed_.size() || texel * 6 >= packed_[map].halves.size()) return t;
+    t.halves_ = packed_[map].halves.data() + texel * 6;
+    t.scale_ = packed_[map].scale;
+    t.surface_light_ = surface_light_;
+    return t;
+}
+
 vec3 VertexCorrectionField::Texel::value(bool with_surface_light) const {
     auto rgb = [](const uint16_t* h) {
         return vec3(glm::unpackHalf1x16(h[0]), glm::unpackHalf1x16(h[1]),

@@ -73,6 +73,8 @@ class VertexCorrectionField {
         bool surface_light_ = false;
     };
     Texel locate(const SurfaceHit& hit) const;
+    // The field's value at texel `texel` of lightmap `map` (the trace prints it).
+    Texel at_texel(size_t map, size_t texel) const;
     // locate(hit).value(with_surface_light) at once; false (and nothing) where not found.
     bool at(const SurfaceHit& hit, bool with_surface_light, vec3* out) const;
     // Whether the field holds surface light (texel_surface_light = walk, bounces >= 2).
