@@ -59,6 +59,26 @@ Mean scattered_mean(const BakeEstimator& e, vec3 p, int paths, uint64_t key, boo
     return {m, std::max(0.0, s2 / paths - m * m) / paths};
 }
 
+// Mean and variance of the mean of value(estimate) over `paths` estimates at (p, n) with
+// albedo 0.7, path i drawing CounterRng(stream, key, 0, i); 8 fixed chunks in parallel.
+template <class Value>
+Mean path_mean(const BakeEstimator& e, vec3 p, vec3 n, uint64_t stream, uint64_t key, int paths,
+               Value value) {
+    std::vector<double> sums(8, 0.0), sums2(8, 0.0);
+    tbb::parallel_for(0, 8, [&](int chunk) {
+        BakeCounters counters;
+        for (int i = chunk; i < paths; i += 8) {
+            CounterRng rng(stream, key, 0, uint64_t(i));
+            const double v = value(e.estimate(p, n, vec3(0.7f), rng, counters));
+            sums[size_t(chunk)] += v, sums2[size_t(chunk)] += v * v;
+        }
+    });
+    double sum = 0.0, sum2 = 0.0;
+    for (int c = 0; c < 8; ++c) sum += sums[size_t(c)], sum2 += sums2[size_t(c)];
+    const double m = sum / paths;
+    return {m, std::max(0.0, sum2 / paths - m * m) / paths};
+}
+
 // order 1: single scattering; order 2: media_bounces = 2, whose multiple part is order 2 alone
 // (the lit medium's second_scatter in impulse): both are what the estimate is unbiased for.
 // rate: bake.texel_mc_rate (1: every path runs the Monte Carlo terms; below, Russian roulette
@@ -296,19 +316,9 @@ TEST(LitMedium, SurfacesTheTexelSeesAreNotHiddenLight) {
     const BakeEstimator vpt(*f.rays, f.media, nullptr, BakeMethod::Vpt, s);
     // The box's face towards the wall.
     const vec3 p(0.1f, 0.5f, 0.5f), n(0.0f, 1.0f, 0.0f);
-    auto mean_single = [&](const BakeEstimator& e, uint64_t key, int paths) {
-        double sum = 0.0, sum2 = 0.0;
-        BakeCounters counters;
-        for (int i = 0; i < paths; ++i) {
-            CounterRng rng(9, key, 0, uint64_t(i));
-            const double v = luminance(e.estimate(p, n, vec3(0.7f), rng, counters).single);
-            sum += v, sum2 += v * v;
-        }
-        const double m = sum / paths;
-        return std::pair{m, std::max(0.0, sum2 / paths - m * m) / paths};
-    };
-    const auto [a, va] = mean_single(impulse, 1, 40000);
-    const auto [b, vb] = mean_single(vpt, 2, 160000);
+    auto single = [](const IrradianceParts& parts) { return double(luminance(parts.single)); };
+    const auto [a, va] = path_mean(impulse, p, n, 9, 1, 40000, single);
+    const auto [b, vb] = path_mean(vpt, p, n, 9, 2, 160000, single);
     const double t = (a - b) / std::sqrt(va + vb);
     std::printf("box face by a wall, single: impulse %.5f +- %.5f, vpt %.5f +- %.5f, t %.2f\n", a,
                 std::sqrt(va), b, std::sqrt(vb), t);
@@ -337,26 +347,15 @@ TEST(LitMedium, PointLitSurfaceLightByLightTracingKeepsTheMean) {
     s.media_bounces = 3;
     s.texel_mc_rate = 1.0f;
     const vec3 p(0.0f, 0.2f, 0.0f), n(0.0f, 0.0f, 1.0f);
-    auto scattered = [&](bool mis, uint64_t key, int paths) {
+    auto scattered = [&](bool mis, uint64_t key) {
         s.surface_light_mis = mis;
         const BakeEstimator e(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
-        std::vector<double> sums(8, 0.0), sums2(8, 0.0);
-        tbb::parallel_for(0, 8, [&](int chunk) {
-            BakeCounters counters;
-            for (int i = chunk; i < paths; i += 8) {
-                CounterRng rng(21, key, 0, uint64_t(i));
-                const IrradianceParts parts = e.estimate(p, n, vec3(0.7f), rng, counters);
-                const double v = luminance(parts.single + parts.multiple);
-                sums[size_t(chunk)] += v, sums2[size_t(chunk)] += v * v;
-            }
+        return path_mean(e, p, n, 21, key, 20000, [](const IrradianceParts& parts) {
+            return double(luminance(parts.single + parts.multiple));
         });
-        double sum = 0.0, sum2 = 0.0;
-        for (int c = 0; c < 8; ++c) sum += sums[size_t(c)], sum2 += sums2[size_t(c)];
-        const double m = sum / paths;
-        return std::pair{m, std::max(0.0, sum2 / paths - m * m) / paths};
     };
-    const auto [a, va] = scattered(true, 1, 20000);
-    const auto [b, vb] = scattered(false, 2, 20000);
+    const auto [a, va] = scattered(true, 1);
+    const auto [b, vb] = scattered(false, 2);
     const double t = (a - b) / std::sqrt(va + vb);
     std::printf("floor by a lit wall, scattered: mis %.5f +- %.5f, walk %.5f +- %.5f, t %.2f\n", a,
                 std::sqrt(va), b, std::sqrt(vb), t);

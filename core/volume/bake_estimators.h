@@ -319,6 +319,8 @@ class BakeEstimator {
     struct PointLitPoint {
         vec3 irradiance{0.0f};
         double light_pdf = 0.0, walk_pdf = 0.0;
+        vec3 to_y{0.0f};  // unit, from the scattering event to y
+        float distance = 0.0f;
     };
     bool point_lit_point(const Light& light, const SurfaceHit& y, const WalkScatter& from,
                          bool check_visibility, BakeCounters& counters, PointLitPoint* out) const;

@@ -56,6 +56,8 @@ bool BakeEstimator::point_lit_point(const Light& light, const SurfaceHit& y,
     const double t_x = media_.transmittance(from.x, -v, r_x);
     out->walk_pdf = hg_phase(from.g, glm::dot(from.dir_in, -v)) * from.survive * t_x *
                     std::abs(cos_x_g) / (double(r_x) * r_x);
+    out->to_y = -v;
+    out->distance = r_x;
     return true;
 }
 
@@ -77,10 +79,8 @@ vec3 BakeEstimator::point_lit_surface_light(const WalkScatter& at, CounterRng& r
         PointLitPoint p;
         // y is the light's first hit: visible from it.
         if (!point_lit_point(light, y, at, false, counters, &p)) continue;
-        const vec3 to_x = at.x - y.position;
-        const float r_x = glm::length(to_x);
         ++counters.rays;
-        if (scene_.occluded(shadow_ray(at.x, -to_x / r_x, r_x))) continue;
+        if (scene_.occluded(shadow_ray(at.x, p.to_y, p.distance))) continue;
         // f / pdf with f = albedo / pi E_L(y) x the walk's density of y (phase x transmittance
         // x cos_y / r^2, without the roulette, which is not part of the light's path).
         const double walk_density = at.survive > 0.0f ? p.walk_pdf / double(at.survive) : 0.0;

@@ -209,11 +209,4 @@ vec3 VertexCorrectionField::Texel::value(bool with_surface_light) const {
     return v * scale_;
 }
 
-bool VertexCorrectionField::at(const SurfaceHit& hit, bool with_surface_light, vec3* out) const {
-    const Texel texel = locate(hit);
-    if (!texel.found()) return false;
-    *out = texel.value(with_surface_light);
-    return true;
-}
-
 }  // namespace freqlab

@@ -75,8 +75,6 @@ class VertexCorrectionField {
     Texel locate(const SurfaceHit& hit) const;
     // The field's value at texel `texel` of lightmap `map` (the trace prints it).
     Texel at_texel(size_t map, size_t texel) const;
-    // locate(hit).value(with_surface_light) at once; false (and nothing) where not found.
-    bool at(const SurfaceHit& hit, bool with_surface_light, vec3* out) const;
     // Whether the field holds surface light (texel_surface_light = walk, bounces >= 2).
     bool has_surface_light() const { return surface_light_; }
     bool empty() const { return maps_ == nullptr; }
