@@ -10,6 +10,7 @@
 #include "scene/brdf.h"
 #include "scene/light.h"
 #include "stats_helpers.h"
+#include "volume/near_light_directions.h"
 
 using namespace freqlab;
 using boost::math::quadrature::gauss;
@@ -370,6 +371,51 @@ TEST(Sampling, HenyeyGreensteinDirectionsAreThePhaseFunctionAboutTheirAxis) {
         EXPECT_GT(test::chi_square_p_value(cos_obs, cos_exp, &chi2), 1e-3) << "cos chi2 " << chi2;
         EXPECT_GT(test::chi_square_p_value(phi_obs, phi_exp, &chi2), 1e-3) << "phi chi2 " << chi2;
     }
+}
+
+TEST(Sampling, NearLightDirectionsFollowTheirPdf) {
+    // Directions aimed past a point light (volume/near_light_directions.h): the angle to the
+    // light's direction against the pdf() integrated over rings of it (chi-square), none
+    // outside the cone, and two lights' pdf the mean of each one's.
+    const vec3 x(0.2f, -0.4f, 0.1f), light(1.0f, 2.0f, 3.0f);
+    Light point;
+    point.position = light;
+    const NearLightDirections one({point}, 1.0f);
+    const vec3 axis = glm::normalize(light - x);
+    const Frame frame(axis);
+    const double max_angle = std::atan(0.5);  // the cone the strategy covers (any point's)
+    auto direction_at = [&](double theta) {
+        return frame.to_world(vec3(float(std::sin(theta)), 0.0f, float(std::cos(theta))));
+    };
+    const int n = 200000, bins = 32;
+    std::vector<double> observed(bins + 1, 0.0), expected(bins + 1, 0.0);
+    CounterRng rng(23, 1, 0, 0);
+    for (int i = 0; i < n; ++i) {
+        vec3 d;
+        ASSERT_TRUE(one.sample(x, rng.next_float(), rng.next_float(), rng.next_float(), &d));
+        ASSERT_NEAR(glm::length(d), 1.0f, 1e-5f);
+        const double theta = std::acos(std::clamp(double(glm::dot(d, axis)), -1.0, 1.0));
+        observed[size_t(std::min(bins, int(theta / max_angle * bins)))] += 1;
+    }
+    for (int b = 0; b < bins; ++b)
+        expected[size_t(b)] =
+            n * gauss<double, 20>::integrate(
+                    [&](double t) { return 2 * M_PI * std::sin(t) * one.pdf(x, direction_at(t)); },
+                    max_angle * b / bins, max_angle * (b + 1) / bins);
+    EXPECT_EQ(observed[size_t(bins)], 0.0) << "outside the cone";
+    EXPECT_EQ(one.pdf(x, direction_at(max_angle * 1.01)), 0.0);
+    EXPECT_EQ(one.pdf(x, -axis), 0.0);
+    observed.pop_back(), expected.pop_back();
+    double chi2;
+    EXPECT_GT(test::chi_square_p_value(observed, expected, &chi2), 1e-3) << "chi2 " << chi2;
+    Light other = point;
+    other.position = vec3(-2.0f, 0.5f, 1.0f);
+    const NearLightDirections two({point, other}, 0.3f);
+    const NearLightDirections alone({other}, 0.3f);
+    const vec3 d = direction_at(0.2);
+    EXPECT_NEAR(two.pdf(x, d), 0.5 * (one.pdf(x, d) + alone.pdf(x, d)), 1e-9 * one.pdf(x, d));
+    const double f = two.fraction();
+    EXPECT_NEAR(two.mixture_pdf(x, d, 0.25), (1 - f) * 0.25 + f * two.pdf(x, d), 1e-9);
 }
 
 TEST(Sampling, LightSamplesGiveTheClosedFormIrradiance) {

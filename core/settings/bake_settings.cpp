@@ -98,6 +98,14 @@ const SettingsSchema& BakeSettings::schema() {
                    "(multiple importance sampling, power heuristic; unbiased). Without it the "
                    "hot spot next to a point light arrives only when a walk lands on it: "
                    "fireflies.")
+            .field(&BakeSettings::near_light_fraction, "near_light_fraction", 0, 0.9, "",
+                   kInvalidatesBake,
+                   "Walks through media (impulse's texel walks and vpt): the chance that a "
+                   "scattering or surface vertex aims its next direction at a cone about a point "
+                   "light, tangent uniform (one-sample MIS with the phase function or cosine; "
+                   "unbiased). A segment passing h from a point light gathers ~1 / h of its "
+                   "light, which phase or cosine sampling alone finds with unbounded variance "
+                   "(fireflies by lights in fog). 0: never.")
             .field(&BakeSettings::vertex_corrections, "vertex_corrections", 0, 1, "",
                    kInvalidatesBake,
                    "Impulse: path vertices deeper than lit_medium_depth take the texels' Monte "

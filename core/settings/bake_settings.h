@@ -36,6 +36,9 @@ struct BakeSettings {
     // Impulse, texel_surface_light = walk: point-lit surfaces' light also by light tracing,
     // MIS-weighted against the walk's landing (volume/bake_surface_light.cpp).
     bool surface_light_mis = true;
+    // Walks through media (impulse's texel walks, vpt): the chance a direction is aimed past a
+    // point light (volume/near_light_directions.h).
+    float near_light_fraction = 0.1f;
     // Impulse: deeper path vertices read the texels' Monte Carlo terms of their emitters,
     // estimated before the bake (volume/vertex_corrections.h).
     bool vertex_corrections = true;

@@ -60,7 +60,12 @@ BakeMethod parse_bake_method(const std::string& text) {
 
 BakeEstimator::BakeEstimator(const RayScene& scene, const Media& media, const ImpulseTables* tables,
                              BakeMethod method, const BakeSettings& settings)
-    : scene_(scene), media_(media), tables_(tables), method_(method), settings_(settings) {
+    : scene_(scene),
+      media_(media),
+      tables_(tables),
+      method_(method),
+      settings_(settings),
+      near_lights_(scene.scene().lights, settings.near_light_fraction) {
     if (method == BakeMethod::Impulse && !media.empty() && !tables)
         throw Error("", "--method", "impulse needs the impulse-response tables");
     if (tables) {
@@ -951,6 +956,44 @@ vec3 BakeEstimator::point_lights_along(const vec3& o, const vec3& d, double t_ma
     return sum;
 }
 
+bool BakeEstimator::aims_at_point_lights() const {
+    return near_lights_.active() && !media_.empty();
+}
+
+bool BakeEstimator::sample_walk_direction(const vec3& x, const vec3& axis, const double* g,
+                                          bool aim, CounterRng& rng, vec3* dir,
+                                          float* weight) const {
+    // A surface vertex (g null): the cosine about the normal `axis`, weight cos / pdf (pi with
+    // the cosine alone). A medium vertex: HG about the direction of travel, weight phase / pdf.
+    const float u_pick = aim ? rng.next_float() : 1.0f;
+    const float u1 = rng.next_float(), u2 = rng.next_float();
+    const float fraction = near_lights_.fraction();
+    if (u_pick < fraction) {
+        if (!near_lights_.sample(x, u_pick / fraction, u1, u2, dir)) return false;
+    } else if (g) {
+        *dir = sample_hg_direction(float(*g), axis, u1, u2);
+        if (!aim) {
+            *weight = 1.0f;
+            return true;
+        }
+    } else {
+        const vec3 local = sample_cosine_hemisphere(u1, u2);
+        if (local.z <= 1e-6f) return false;
+        *dir = Frame(axis).to_world(local);
+        if (!aim) {
+            *weight = kPi;
+            return true;
+        }
+    }
+    const double base_value =
+        g ? hg_phase(*g, glm::dot(axis, *dir)) : std::max(0.0f, glm::dot(axis, *dir)) * kInvPi;
+    if (!(base_value > 0.0)) return false;
+    const double pdf = near_lights_.mixture_pdf(x, *dir, base_value);
+    // Cosine: the walk carries radiance x cos / pdf (= pi for the cosine alone).
+    *weight = float((g ? base_value : base_value * kPiD) / pdf);
+    return std::isfinite(*weight);
+}
+
 IrradianceParts BakeEstimator::volume_path(const vec3& p, const vec3& n, CounterRng& rng,
                                            BakeCounters& counters) const {
     IrradianceParts parts;
@@ -964,11 +1007,13 @@ IrradianceParts BakeEstimator::volume_path(const vec3& p, const vec3& n, Counter
             std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
         parts.surface += s.irradiance * cos_x * float(media_.transmittance(p, s.dir, length));
     }
-    // The walk from a cosine-sampled direction: irradiance = pi x radiance.
-    const float u1 = rng.next_float(), u2 = rng.next_float();
-    const vec3 local_dir = sample_cosine_hemisphere(u1, u2);
-    if (local_dir.z <= 1e-6f) return parts;
-    parts += walk(origin(p, n), Frame(n).to_world(local_dir), vec3(kPi), rng, counters);
+    // The walk from a cosine-sampled direction (irradiance = pi x radiance), or one aimed past
+    // a point light.
+    vec3 dir;
+    float weight = 0.0f;
+    if (!sample_walk_direction(p, n, nullptr, aims_at_point_lights(), rng, &dir, &weight))
+        return parts;
+    parts += walk(origin(p, n), dir, vec3(weight), rng, counters);
     return parts;
 }
 
@@ -984,6 +1029,8 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
     WalkScatter last;  // the last scattering event (texel walks' surface light)
     const bool point_lit_mis =
         media_multiple_only && texel->surface_light_depth >= 0 && surface_light_mis();
+    // point_lights_along() runs on the walk's segments: aim some of them past point lights.
+    const bool aims = gather_emitters && aims_at_point_lights();
     auto add = [&](int cat, const vec3& v) {
         (cat == 0 ? parts.surface : cat == 1 ? parts.single : parts.multiple) += v;
     };
@@ -1035,11 +1082,15 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
                     ? std::min(1.0f,
                                std::max(throughput.x, std::max(throughput.y, throughput.z)) / kPi)
                     : 1.0f;
-            last = WalkScatter{x, dir, c.g, survive};
+            const bool aim = aims && chain < settings_.media_bounces;
+            last = WalkScatter{x, dir, c.g, survive, aim};
             if (point_lit_mis)
                 (chain == 1 ? texel->surface_light->single : texel->surface_light->multiple) +=
                     throughput * point_lit_surface_light(last, rng, counters);
-            dir = sample_hg_direction(float(c.g), dir, rng.next_float(), rng.next_float());
+            float weight = 0.0f;
+            const vec3 travel = dir;  // sample_walk_direction writes dir
+            if (!sample_walk_direction(x, travel, &c.g, aim, rng, &dir, &weight)) break;
+            throughput *= weight;
             pos = x;
             if (events >= 4) {
                 if (rng.next_float() >= survive) break;
@@ -1073,11 +1124,10 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
                               float(media_.transmittance(hit.position, s.dir, length)));
         }
         // Continue: cosine sampling at y makes the throughput factor the albedo.
-        throughput *= albedo_y;
         chain = 0;
-        const vec3 ld = sample_cosine_hemisphere(rng.next_float(), rng.next_float());
-        if (ld.z <= 1e-6f) break;
-        dir = Frame(ny).to_world(ld);
+        float weight = 0.0f;
+        if (!sample_walk_direction(hit.position, ny, nullptr, aims, rng, &dir, &weight)) break;
+        throughput *= albedo_y * (weight * kInvPi);  // weight: cos / pdf x pi
         pos = origin(hit.position, ny);
     }
     return parts;

@@ -41,6 +41,7 @@
 #include "volume/impulse_irradiance.h"
 #include "volume/impulse_query.h"
 #include "volume/media.h"
+#include "volume/near_light_directions.h"
 
 namespace freqlab {
 
@@ -301,6 +302,7 @@ class BakeEstimator {
         vec3 x{0.0f}, dir_in{0.0f};  // where, and the walk's direction of travel arriving there
         double g = 0.0;
         float survive = 1.0f;  // the roulette's chance that the walk's next segment is traced
+        bool aimed = false;    // its next direction was drawn with NearLightDirections
     };
     // walk's TexelWalk surface light at the surface it ends on, coming from the scattering
     // event `from`; with bake.surface_light_mis, less the share of point-lit light that
@@ -318,7 +320,10 @@ class BakeEstimator {
     // light does not reach y's side.
     struct PointLitPoint {
         vec3 irradiance{0.0f};
-        double light_pdf = 0.0, walk_pdf = 0.0;
+        double light_pdf = 0.0, walk_pdf = 0.0;  // densities of y (area measure)
+        // The path's factor from x to y: phase x transmittance x cos_y / r^2 (walk_pdf without
+        // the roulette, when the walk's direction is the phase function's alone).
+        double walk_f = 0.0;
         vec3 to_y{0.0f};  // unit, from the scattering event to y
         float distance = 0.0f;
     };
@@ -347,6 +352,14 @@ class BakeEstimator {
     bool visible(const vec3& from, const vec3& n, const vec3& dir, double distance,
                  BakeCounters& counters) const;
     vec3 origin(const vec3& p, const vec3& n) const;
+    // Walks aim some directions past point lights (volume/near_light_directions.h).
+    bool aims_at_point_lights() const;
+    // A walk's next direction from x: the cosine about the surface normal `axis` (g null) or
+    // HG(*g) about the direction of travel `axis`, mixed with NearLightDirections when `aim`.
+    // `weight`: the walk's throughput factor (f / pdf; pi for the cosine: irradiance). False:
+    // no direction (the walk ends).
+    bool sample_walk_direction(const vec3& x, const vec3& axis, const double* g, bool aim,
+                               CounterRng& rng, vec3* dir, float* weight) const;
     // Impulse's texel vertices take their multiple scattering from a walk (BakeSettings).
     bool texel_walk() const;
     // ... and the in-scattered light of other surfaces (BakeSettings::texel_surface_light).
@@ -357,6 +370,7 @@ class BakeEstimator {
     const ImpulseTables* tables_;
     BakeMethod method_;
     BakeSettings settings_;
+    NearLightDirections near_lights_;
     int table_bounces_ = 1;
     // What the method does with media on a segment (fixed at construction: which media exist
     // never changes, only their coefficients): attenuate it (extinction, impulse, and vpt's

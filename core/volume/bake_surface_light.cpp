@@ -54,8 +54,11 @@ bool BakeEstimator::point_lit_point(const Light& light, const SurfaceHit& y,
         light.intensity * float(double(cos_light_s) / (double(r_light) * r_light) * t_light);
     out->light_pdf = std::abs(cos_light_g) / (4.0 * kPiD * double(r_light) * r_light);
     const double t_x = media_.transmittance(from.x, -v, r_x);
-    out->walk_pdf = hg_phase(from.g, glm::dot(from.dir_in, -v)) * from.survive * t_x *
-                    std::abs(cos_x_g) / (double(r_x) * r_x);
+    const double phase = hg_phase(from.g, glm::dot(from.dir_in, -v));
+    const double dir_pdf = from.aimed ? near_lights_.mixture_pdf(from.x, -v, phase) : phase;
+    const double geometry = t_x * std::abs(cos_x_g) / (double(r_x) * r_x);
+    out->walk_f = phase * geometry;
+    out->walk_pdf = dir_pdf * from.survive * geometry;
     out->to_y = -v;
     out->distance = r_x;
     return true;
@@ -81,12 +84,11 @@ vec3 BakeEstimator::point_lit_surface_light(const WalkScatter& at, CounterRng& r
         if (!point_lit_point(light, y, at, false, counters, &p)) continue;
         ++counters.rays;
         if (scene_.occluded(shadow_ray(at.x, p.to_y, p.distance))) continue;
-        // f / pdf with f = albedo / pi E_L(y) x the walk's density of y (phase x transmittance
-        // x cos_y / r^2, without the roulette, which is not part of the light's path).
-        const double walk_density = at.survive > 0.0f ? p.walk_pdf / double(at.survive) : 0.0;
+        // f / pdf with f = albedo / pi E_L(y) x the path's factor from x to y (phase x
+        // transmittance x cos_y / r^2; the roulette is not part of the light's path).
         const double weight =
             p.light_pdf * p.light_pdf / (p.light_pdf * p.light_pdf + p.walk_pdf * p.walk_pdf);
-        sum += albedo * kInvPi * p.irradiance * float(walk_density / p.light_pdf * weight);
+        sum += albedo * kInvPi * p.irradiance * float(p.walk_f / p.light_pdf * weight);
     }
     return sum;
 }
