@@ -314,11 +314,8 @@ bool BakeEstimator::direct_light(const EmitterSample& s, const vec3& p, const ve
         return false;
     }
     SegmentOptics optics;
-    if (attenuates_) {
-        const double length =
-            std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
-        optics = segment_optics(p, s.dir, length, rng);
-    }
+    // An infinite distance ends where the ray leaves the media (optics.length).
+    if (attenuates_) optics = segment_optics(p, s.dir, s.distance, rng);
     parts.surface += s.irradiance * cos_x * optics.transmittance_float();
     if (scatters_) {
         const double distance = std::isfinite(s.distance) ? s.distance : optics.length;
@@ -335,9 +332,9 @@ IrradianceParts BakeEstimator::unoccluded_scatter(const EmitterSample& s, const 
                                                   const vec3& n, float albedo_lum, CounterRng& rng,
                                                   BakeCounters& counters) const {
     IrradianceParts out;
-    const double length = std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
+    const SegmentOptics optics = segment_optics(p, s.dir, s.distance, rng);
+    const double length = optics.length;
     if (!(length > 0.0) || !std::isfinite(length)) return out;
-    const SegmentOptics optics = segment_optics(p, s.dir, length, rng);
     add_scattered(s.kind, s.intensity, s.dir, length, s.shift, s.emitter_normal, optics, n,
                   albedo_lum, out, counters);
     return out;
@@ -346,9 +343,9 @@ IrradianceParts BakeEstimator::unoccluded_scatter(const EmitterSample& s, const 
 vec3 BakeEstimator::unoccluded_higher_orders(const EmitterSample& s, const vec3& p, const vec3& n,
                                              float albedo_lum, CounterRng& rng,
                                              BakeCounters& counters) const {
-    const double length = std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
+    const SegmentOptics optics = segment_optics(p, s.dir, s.distance, rng);
+    const double length = optics.length;
     if (!(length > 0.0) || !std::isfinite(length)) return vec3(0.0f);
-    const SegmentOptics optics = segment_optics(p, s.dir, length, rng);
     IrradianceParts all, two;
     add_scattered(s.kind, s.intensity, s.dir, length, s.shift, s.emitter_normal, optics, n,
                   albedo_lum, all, counters);
@@ -1003,9 +1000,7 @@ IrradianceParts BakeEstimator::volume_path(const vec3& p, const vec3& n, Counter
     for (const EmitterSample& s : emitters) {
         const float cos_x = glm::dot(n, s.dir);
         if (s.behind || cos_x <= 0.0f || !visible(p, n, s.dir, s.distance, counters)) continue;
-        const double length =
-            std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
-        parts.surface += s.irradiance * cos_x * float(media_.transmittance(p, s.dir, length));
+        parts.surface += s.irradiance * cos_x * float(media_.transmittance(p, s.dir, s.distance));
     }
     // The walk from a cosine-sampled direction (irradiance = pi x radiance), or one aimed past
     // a point light.
@@ -1072,10 +1067,8 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
                 const float phase = float(hg_phase(c.g, glm::dot(s.dir, dir)));
                 ++counters.rays;
                 if (scene_.occluded(shadow_ray(x, s.dir, s.distance))) continue;
-                const double length =
-                    std::isfinite(s.distance) ? s.distance : media_.exit_distance(x, s.dir);
                 add(cat, throughput * s.irradiance * phase *
-                             float(media_.transmittance(x, s.dir, length)));
+                             float(media_.transmittance(x, s.dir, s.distance)));
             }
             const float survive =
                 events >= 4
@@ -1118,10 +1111,8 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
             if (s.behind || cos_y <= 0.0f ||
                 !visible(hit.position, ny, s.dir, s.distance, counters))
                 continue;
-            const double length =
-                std::isfinite(s.distance) ? s.distance : media_.exit_distance(hit.position, s.dir);
             add(category, throughput * albedo_y * kInvPi * s.irradiance * cos_y *
-                              float(media_.transmittance(hit.position, s.dir, length)));
+                              float(media_.transmittance(hit.position, s.dir, s.distance)));
         }
         // Continue: cosine sampling at y makes the throughput factor the albedo.
         chain = 0;

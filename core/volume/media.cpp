@@ -77,10 +77,11 @@ DensityGrid::DensityGrid(vec3 box_min, vec3 box_max, ivec3 resolution, std::vect
     }
 }
 
-double DensityGrid::integral(const vec3& o, const vec3& d, double t_begin, double t_end) const {
-    if (line_axis_ < 0) return integral_by_jumps(o, d, t_begin, t_end);
+double DensityGrid::integral(const vec3& o, const vec3& d, double t_begin, double t_end,
+                             bool inside) const {
+    if (line_axis_ < 0) return integral_by_jumps(o, d, t_begin, t_end, inside);
     double ta = t_begin, tb = t_end;
-    if (!clip_to_box(min_, max_corner_, o, d, &ta, &tb)) return 0.0;
+    if (!inside && !clip_to_box(min_, max_corner_, o, d, &ta, &tb)) return 0.0;
     const int a = line_axis_;
     const int n = int(line_.size());
     const double base = min_[a], size = march_voxel_[a];
@@ -96,10 +97,10 @@ double DensityGrid::integral(const vec3& o, const vec3& d, double t_begin, doubl
     return std::abs(prefix(z1, c1) - prefix(z0, c0)) / std::abs(double(d[a]));
 }
 
-double DensityGrid::integral_by_jumps(const vec3& o, const vec3& d, double t_begin,
-                                      double t_end) const {
+double DensityGrid::integral_by_jumps(const vec3& o, const vec3& d, double t_begin, double t_end,
+                                      bool inside) const {
     double ta = t_begin, tb = t_end;
-    if (!clip_to_box(min_, max_corner_, o, d, &ta, &tb)) return 0.0;
+    if (!inside && !clip_to_box(min_, max_corner_, o, d, &ta, &tb)) return 0.0;
     // The density along the ray, f(t), is constant between voxel faces; with J_c its jump
     // f(t_c+) - f(t_c-) where the ray crosses a face at t_c, integration by parts gives
     //   int_ta^tb f = (tb - ta) f(tb-) - sum_c (t_c - ta) J_c.
@@ -266,6 +267,9 @@ Media::Media(const std::vector<MediumDesc>& descs, const std::string& scene_file
         } else if (e.desc.is_grid()) {
             e.grid = sample_grid(e.desc);
         }
+        e.grid_is_bounds = e.grid && e.desc.bounds == MediumBounds::Box &&
+                           e.grid->box_min() == e.desc.box_min &&
+                           e.grid->box_max() == e.desc.box_max;
         media_.push_back(std::move(e));
     }
 }
@@ -337,27 +341,30 @@ void add_medium(const MediumDesc& m, double density_length, SegmentOptics& s) {
 
 SegmentOptics Media::integrate(const vec3& o, const vec3& d, double t_max) const {
     SegmentOptics s;
-    s.length = t_max;
+    double exit = 0.0;
     for (const Entry& e : media_) {
         double t0, t1;
         if (!clip(e, o, d, t_max, &t0, &t1)) continue;
+        exit = std::max(exit, t1);
         double density_length = 0.0;  // integral of the density over the segment
         if (e.grid)
-            density_length = e.grid->integral(o, d, t0, t1);
+            density_length = e.grid->integral(o, d, t0, t1, e.grid_is_bounds);
         else
             density_length = t1 - t0;
         add_medium(e.desc, density_length, s);
     }
+    s.length = std::isfinite(t_max) ? t_max : exit;
     return s;
 }
 
 SegmentOptics Media::track(const vec3& o, const vec3& d, double t_max, CounterRng& rng) const {
     SegmentOptics s;
-    s.length = t_max;
     s.tau_t_exact = 0.0;
+    double exit = 0.0;
     for (const Entry& e : media_) {
         double t0, t1;
         if (!clip(e, o, d, t_max, &t0, &t1)) continue;
+        exit = std::max(exit, t1);
         const double mu = (e.desc.sigma_s + e.desc.sigma_a) * e.desc.density_scale;
         double density_length = 0.0;
         if (!e.grid) {
@@ -381,6 +388,7 @@ SegmentOptics Media::track(const vec3& o, const vec3& d, double t_max, CounterRn
         }
         add_medium(e.desc, density_length, s);
     }
+    s.length = std::isfinite(t_max) ? t_max : exit;
     return s;
 }
 

@@ -49,9 +49,12 @@ class DensityGrid {
     void march(const vec3& o, const vec3& d, double t_begin, double t_end, Fn&& fn) const;
     // The integral of the density over [t_begin, t_end]: march() summed, or, for a grid that
     // varies along one axis only (a height-fog ramp), in O(1) from prefix sums along it.
-    double integral(const vec3& o, const vec3& d, double t_begin, double t_end) const;
+    // `inside`: [t_begin, t_end] is known to lie in the grid's box (not clipped again).
+    double integral(const vec3& o, const vec3& d, double t_begin, double t_end,
+                    bool inside = false) const;
     // The same for any grid, from the density's jumps at the voxel faces (media.cpp).
-    double integral_by_jumps(const vec3& o, const vec3& d, double t_begin, double t_end) const;
+    double integral_by_jumps(const vec3& o, const vec3& d, double t_begin, double t_end,
+                             bool inside = false) const;
 
   private:
     vec3 min_, max_corner_, voxel_;
@@ -111,6 +114,8 @@ class Media {
 
     // Coefficients at a point (sigma_s, sigma_a and g of the mixture).
     HomogeneousMedium at(const vec3& p) const;
+    // t_max may be infinite: the segment then ends where the ray leaves the last bounded
+    // medium (exit_distance(), in the result's length; a directional light's connection).
     SegmentOptics integrate(const vec3& o, const vec3& d, double t_max) const;
     // The same by ratio tracking through density grids (homogeneous media stay exact and draw
     // nothing): points of a Poisson process at the grid's majorant rate mu rho_max give the
@@ -144,6 +149,8 @@ class Media {
     struct Entry {
         MediumDesc desc;
         std::shared_ptr<const DensityGrid> grid;  // null: constant density inside bounds
+        // The grid's box is the medium's bounds: clip() has clipped a segment to it already.
+        bool grid_is_bounds = false;
     };
     // The part of [0, t_max] inside medium e's bounds; false when none.
     // Where in [t0, t1] medium e's optical thickness from t0 reaches `target` (> 0): false
