@@ -9,7 +9,7 @@ packages=(
   libembree-dev libopenexr-dev libimath-dev libopenimageio-dev libglm-dev libglfw3-dev libosmesa6-dev
   libimgui-dev libfftw3-dev libtbb-dev nlohmann-json3-dev libassimp-dev libgtest-dev
   libbenchmark-dev libboost-math-dev libopenvdb-dev libcli11-dev python3-glad xvfb xauth
-  blender-data assimp-testmodels fonts-dejavu-core clang-format
+  blender-data assimp-testmodels fonts-dejavu-core clang-format clang libclang-rt-14-dev
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -333,60 +333,16 @@ void apply_bake_setting(Workbench::State& s, const std::string& assignment) {
     restart_bake(s);
 }
 
-nlohmann::json bake_session_to_json(const Workbench::State& s) {
+BakeSessionFile bake_session_file(const Workbench::State& s) {
     const BakeSession& b = *s.bake;
-    BakeSettings settings = b.settings;
-    SettingsGroup group;
-    group.bind(BakeSettings::schema(), &settings);
-    nlohmann::json media = nlohmann::json::array();
+    BakeSessionFile f;
+    f.settings = b.settings;
     for (size_t i = 0; i < b.media->size(); ++i) {
         const MediumDesc& d = b.media->desc(i);
-        media.push_back({{"name", d.name},
-                         {"sigma_s", d.sigma_s},
-                         {"sigma_a", d.sigma_a},
-                         {"g", d.g},
-                         {"density_scale", d.density_scale}});
+        f.media.push_back({d.name, d.sigma_s, d.sigma_a, d.g, d.density_scale});
     }
-    return {{"settings", group.to_json()},
-            {"media", media},
-            {"camera", {{"yaw", b.yaw}, {"pitch", b.pitch}, {"zoom", b.zoom}}},
-            {"probe_lobes", b.show_lobes}};
-}
-
-BakeSessionFile read_bake_session(const JsonReader& r, const Scene& scene) {
-    r.only_keys({"settings", "media", "camera", "probe_lobes"});
-    BakeSessionFile f;
-    SettingsGroup group;
-    group.bind(BakeSettings::schema(), &f.settings);
-    if (r.has("settings"))
-        group.from_json(r.get("settings").raw(), r.file(), r.path() + ".settings");
-    if (r.has("media")) {
-        const JsonReader media = r.get("media");
-        if (media.array_size() != scene.media.size())
-            media.fail("expected " + std::to_string(scene.media.size()) +
-                       " media (the scene's), in the scene's order");
-        for (size_t i = 0; i < scene.media.size(); ++i) {
-            const JsonReader m = media.at(i);
-            m.only_keys({"name", "sigma_s", "sigma_a", "g", "density_scale"});
-            const JsonReader name = m.get("name");
-            if (name.string() != scene.media[i].name)
-                name.fail("expected \"" + scene.media[i].name + "\", the scene's medium " +
-                          std::to_string(i));
-            // The scene format's ranges (medium_desc.cpp).
-            f.media.push_back({m.get("sigma_s").number_in(0.0, 1e6),
-                               m.get("sigma_a").number_in(0.0, 1e6),
-                               m.get("g").number_in(-1.0, 1.0, true, true),
-                               m.get("density_scale").number_in(0.0, 1e6)});
-        }
-    }
-    if (r.has("camera")) {
-        const JsonReader c = r.get("camera");
-        c.only_keys({"yaw", "pitch", "zoom"});
-        f.yaw = float(c.get("yaw").number_in(-180.0, 180.0));
-        f.pitch = float(c.get("pitch").number_in(-60.0, 60.0));
-        f.zoom = float(c.get("zoom").number_in(0.3, 4.0));
-    }
-    if (r.has("probe_lobes")) f.show_lobes = r.get("probe_lobes").boolean();
+    f.yaw = b.yaw, f.pitch = b.pitch, f.zoom = b.zoom;
+    f.show_lobes = b.show_lobes;
     return f;
 }
 

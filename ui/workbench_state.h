@@ -18,6 +18,7 @@
 #include "render/frame_renderer.h"
 #include "scene/json_reader.h"
 #include "scene/scene.h"
+#include "session/session_file.h"
 #include "tables_panel.h"
 #include "volume/lightmap_baker.h"
 #include "workbench.h"
@@ -105,24 +106,11 @@ void draw_bake_panel(Workbench::State& s);
 std::vector<std::string> bake_trace(Workbench::State& s, int x, int y);
 // Probes' SH lobes over the viewport image (call inside the viewport window).
 void draw_probe_lobes(Workbench::State& s);
-// A bake's part of a session file: method, bake settings, every medium's coefficients (by
-// the scene's order and name), the preview camera and the lobes toggle.
-struct BakeSessionFile {
-    BakeSettings settings;
-    struct Coefficients {
-        double sigma_s, sigma_a, g, density_scale;
-    };
-    std::vector<Coefficients> media;  // empty: the scene's own
-    float yaw = 0.0f, pitch = 0.0f, zoom = 1.0f;
-    bool show_lobes = true;
-};
 BakeMethod bake_method(const Workbench::State& s);  // needs s.bake
 // A bake.* assignment (Workbench::apply_setting): the bake restarts with it.
 void apply_bake_setting(Workbench::State& s, const std::string& assignment);
-nlohmann::json bake_session_to_json(const Workbench::State& s);
-// Reads and checks all of `r` against `scene`'s media (names, count, the scene format's
-// ranges) before anything changes; throws Error naming file and field.
-BakeSessionFile read_bake_session(const JsonReader& r, const Scene& scene);
+// A bake's part of the session file (its state now).
+BakeSessionFile bake_session_file(const Workbench::State& s);
 // Stops the bake and takes the file's state (needs s.bake; the caller restarts it).
 void apply_bake_session(Workbench::State& s, const BakeSessionFile& f);
 // Compare for a bake: VPT at 4 x bake.spp, its preview as the frame's reference.

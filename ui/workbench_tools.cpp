@@ -245,25 +245,23 @@ void draw_export_menu(Workbench::State& s) {
 
 json session_to_json(const Workbench::State& s) {
     RenderConfig config = s.config;
-    json insets = json::array();
-    for (const FigureInset& in : s.insets) insets.push_back({in.x, in.y, in.width, in.height});
-    json session = {{"freqlab_session", 1},
-                    {"scene", s.options.scene},
-                    {"method", s.bake ? std::string(to_string(bake_method(s)))
-                                      : render_method_info(s.config.method).name},
-                    {"frame", s.frame},
-                    {"layer", s.layer_name},
-                    {"overlay_on_color", s.overlay_on_color},
-                    {"overlay_opacity", s.overlay_opacity},
-                    {"fixed_range", s.fixed_range},
-                    {"range", {s.range.lo, s.range.hi}},
-                    {"zoom", s.zoom},
-                    {"centre", {s.centre.x, s.centre.y}},
-                    {"inspect", {s.pick_x, s.pick_y}},
-                    {"insets", insets},
-                    {"settings", config.settings_group().to_json()}};
-    if (s.bake) session["bake"] = bake_session_to_json(s);
-    return session;
+    SessionFile f;
+    f.scene = s.options.scene;
+    f.method =
+        s.bake ? std::string(to_string(bake_method(s))) : render_method_info(s.config.method).name;
+    f.frame = s.frame;
+    f.layer = s.layer_name;
+    f.overlay_on_color = s.overlay_on_color;
+    f.overlay_opacity = s.overlay_opacity;
+    f.fixed_range = s.fixed_range;
+    f.range_lo = s.range.lo, f.range_hi = s.range.hi;
+    f.zoom = s.zoom;
+    f.centre_x = s.centre.x, f.centre_y = s.centre.y;
+    f.pick_x = s.pick_x, f.pick_y = s.pick_y;
+    for (const FigureInset& in : s.insets) f.insets.push_back({in.x, in.y, in.width, in.height});
+    f.settings = config.settings_group().to_json();
+    if (s.bake) f.bake = bake_session_file(s);
+    return session_json(f);
 }
 
 void draw_session_menu(Workbench& wb, Workbench::State& s) {
@@ -302,60 +300,36 @@ void Workbench::save_session(const std::string& path) const {
 }
 
 void Workbench::load_session(const std::string& path) {
-    const json doc = JsonReader::parse(read_text_file(path), path);
-    const JsonReader r(doc, path, "");
-    r.only_keys({"freqlab_session", "scene", "method", "frame", "layer", "overlay_on_color",
-                 "overlay_opacity", "fixed_range", "range", "zoom", "centre", "inspect", "insets",
-                 "settings", "bake"});
-    if (r.get("freqlab_session").integer_in(1, 1) != 1) r.fail("unsupported session version");
+    // Everything is read and checked first (core): a bad file leaves the workbench as it was.
+    const SessionFile f = read_session_file(read_text_file(path), path);
     WorkbenchOptions o = s_->options;
-    o.scene = r.get("scene").string();
-    const JsonReader method = r.get("method");
-    o.method = method.string();
-    const std::vector<std::string> render_methods = render_method_names();
-    const bool bake = is_bake_method(o.method);
-    if (!bake &&
-        std::find(render_methods.begin(), render_methods.end(), o.method) == render_methods.end()) {
-        std::string list;
-        for (const std::string& m : render_methods) list += m + ", ";
-        method.fail("expected one of " + list + bake_method_list(", "));
-    }
-    o.frame = r.get("frame").integer_in(0, 1 << 30);
-    o.layer = r.get("layer").string();
+    o.scene = f.scene;
+    o.method = f.method;
+    o.frame = f.frame;
+    o.layer = f.layer;
     o.settings.clear();
-    // Validate the settings before anything changes: a bad file leaves the session as it was.
-    RenderConfig probe;
-    probe.settings_group().from_json(r.get("settings").raw(), path, "settings");
-    std::optional<BakeSessionFile> bake_file;
     std::optional<Scene> scene;  // loaded once: checked against here, then reset() takes it
-    if (bake && r.has("bake")) {
+    if (f.bake) {
         scene = load_scene(o.scene);
-        bake_file = read_bake_session(r.get("bake"), *scene);
+        check_session_media(f, *scene);
     }
     reset(o, scene ? &*scene : nullptr);
     State& s = *s_;
-    s.config.settings_group().from_json(r.get("settings").raw(), path, "settings");
-    if (!bake) s.config.method = parse_render_method(o.method);
-    if (bake_file && s.bake) apply_bake_session(s, *bake_file);
+    s.config.settings_group().from_json(f.settings, path, "settings");
+    if (!f.bake_method) s.config.method = parse_render_method(o.method);
+    if (f.bake && s.bake) apply_bake_session(s, *f.bake);
     restart_renderer(s);
-    s.overlay_on_color = r.get("overlay_on_color").boolean();
-    s.overlay_opacity = float(r.get("overlay_opacity").number_in(0, 1));
-    s.fixed_range = r.get("fixed_range").boolean();
-    const JsonReader range = r.get("range");
-    s.range = {float(range.at(0).number()), float(range.at(1).number())};
-    s.zoom = float(r.get("zoom").number_in(1, 64));
-    const JsonReader centre = r.get("centre");
-    s.centre = ImVec2(float(centre.at(0).number_in(0, 1)), float(centre.at(1).number_in(0, 1)));
-    const JsonReader inspect = r.get("inspect");
-    s.pick_x = inspect.at(0).integer_in(-1, 1 << 20);
-    s.pick_y = inspect.at(1).integer_in(-1, 1 << 20);
+    s.overlay_on_color = f.overlay_on_color;
+    s.overlay_opacity = f.overlay_opacity;
+    s.fixed_range = f.fixed_range;
+    s.range = {f.range_lo, f.range_hi};
+    s.zoom = f.zoom;
+    s.centre = ImVec2(f.centre_x, f.centre_y);
+    s.pick_x = f.pick_x;
+    s.pick_y = f.pick_y;
     s.insets.clear();
-    const JsonReader insets = r.get("insets");
-    for (size_t i = 0; i < insets.array_size() && i < 4; ++i) {
-        const JsonReader in = insets.at(i);
-        s.insets.push_back({in.at(0).integer_in(0, 1 << 20), in.at(1).integer_in(0, 1 << 20),
-                            in.at(2).integer_in(2, 1 << 20), in.at(3).integer_in(2, 1 << 20)});
-    }
+    for (const SessionFile::Inset& in : f.insets)
+        s.insets.push_back({in.x, in.y, in.width, in.height});
     s.session_path = path;
     s.view_dirty = true;
 }

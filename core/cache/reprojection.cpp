@@ -120,7 +120,7 @@ std::vector<int> resolve_pixels(std::vector<CacheRecord>& records, RadianceCache
     for (const CacheRecord& r : records)
         if (r.decision == CacheDecision::Reused) ++start[size_t(r.pixel) + 1];
     for (size_t p = 0; p < pixels; ++p) start[p + 1] += start[p];
-    std::vector<int> order(size_t(start[pixels])), position(records.size(), -1);
+    std::vector<int> order(static_cast<size_t>(start[pixels])), position(records.size(), -1);
     {
         std::vector<int> next(start.begin(), start.end() - 1);
         for (size_t k = 0; k < records.size(); ++k)

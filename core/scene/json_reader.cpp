@@ -26,6 +26,9 @@ json JsonReader::parse(const std::string& text, const std::string& file) {
         throw Error(
             file, "line " + std::to_string(line) + ", column " + std::to_string(col),
             "malformed JSON (" + (pos == std::string::npos ? what : what.substr(pos)) + ")");
+    } catch (const json::exception& e) {
+        // out_of_range.406: a number beyond double (fuzz_scene_json: 1111...e1111...).
+        throw Error(file, "", std::string("malformed JSON (") + e.what() + ")");
     }
 }
 
@@ -52,6 +55,11 @@ JsonReader JsonReader::get(const std::string& key) const {
 }
 
 JsonReader JsonReader::at(size_t index) const {
+    // nlohmann's const operator[] is undefined past the end: every caller gets a located error.
+    if (!value_->is_array()) fail("expected an array, got " + got());
+    if (index >= value_->size())
+        fail("expected at least " + std::to_string(index + 1) + " elements, got " +
+             std::to_string(value_->size()));
     return JsonReader((*value_)[index], file_, path_ + "[" + std::to_string(index) + "]");
 }
 

@@ -2,11 +2,24 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <string>
 
+#include "base/error.h"
 #include "math/fast_atan2.h"
 #include "math/fast_math.h"
 
 namespace freqlab {
+
+namespace {
+
+std::string short_number(float v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", double(v));
+    return text;
+}
+
+}  // namespace
 
 LightSample sample_light(const Light& light, const vec3& p, vec2 u) {
     LightSample s;
@@ -62,6 +75,14 @@ EnvironmentMap::EnvironmentMap(std::string source, std::shared_ptr<const RgbImag
         for (int x = 0; x < w; ++x) {
             const size_t i = size_t(y) * w + x;
             texels_[i].radiance = glm::max(image_->pixels[i], vec3(0.0f)) * scale_;
+            const vec3& r = texels_[i].radiance;
+            const float peak = std::max(r.x, std::max(r.y, r.z));
+            if (!(peak <= kMaxEnvironmentRadiance))  // also NaN from a NaN scale
+                throw Error(source_, "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ")",
+                            "radiance " + short_number(peak) + " (texel x scale " +
+                                short_number(scale_) +
+                                ") exceeds 1e20; larger values overflow the estimators' "
+                                "single precision");
             weights[i] = luminance(texels_[i].radiance) * sin_theta;
         }
     }

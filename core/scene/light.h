@@ -22,7 +22,10 @@ namespace freqlab {
 // an environment sample's radiance is one texel read (no trigonometry), and estimator and
 // pdf agree exactly. What a camera or a mirror sees directly is interpolated bilinearly
 // (eval_smooth) so backgrounds do not look blocky; that radiance is not integrated.
-// Negative texels (some HDR files have them) are clamped to 0 on load.
+// Negative texels (some HDR files have them) are clamped to 0 on load. A texel brighter than
+// kMaxEnvironmentRadiance (after scale) is refused (Error naming the map and the pixel): a
+// finite 1e38 in an HDR file turns every estimate into Inf (found by fuzz_env_hdr).
+constexpr float kMaxEnvironmentRadiance = 1e20f;
 class EnvironmentMap {
   public:
     EnvironmentMap(std::string source, std::shared_ptr<const RgbImage> image, float rotation_deg,

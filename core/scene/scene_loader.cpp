@@ -79,11 +79,13 @@ Trs read_trs(const JsonReader& r, std::initializer_list<const char*> extra_keys 
     std::vector<const char*> keys = {"translate", "rotate", "scale"};
     keys.insert(keys.end(), extra_keys.begin(), extra_keys.end());
     if (!r.is_object()) r.fail("expected an object with translate / rotate / scale");
-    for (const auto& [key, v] : r.raw().items())
+    for (const auto& item : r.raw().items()) {
+        const std::string& key = item.key();  // a structured binding: not capturable in C++17
         if (std::find_if(keys.begin(), keys.end(), [&](const char* k) { return key == k; }) ==
             keys.end())
             throw Error(r.file(), r.path() + "." + key,
                         "unknown field; expected one of: translate, rotate, scale");
+    }
     Trs t;
     if (r.has("translate")) t.translate = r.get("translate").vector3();
     if (r.has("rotate")) t.rotate = read_rotation(r.get("rotate"));

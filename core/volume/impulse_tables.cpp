@@ -121,7 +121,16 @@ ImpulseTables ImpulseTables::load(const fs::path& path) {
         throw Error(file, "header",
                     "not a freqlab impulse-table file (regenerate with `freqlab tables`)");
     const json h = json::parse(text.substr(l1 + 1, l2 - l1 - 1), nullptr, false);
-    if (h.is_discarded()) throw Error(file, "header", "malformed JSON header");
+    if (h.is_discarded() || !h.is_object())
+        throw Error(file, "header", "malformed JSON header; expected an object");
+    // A header field of another type is the same error as a wrong value (json::value() would
+    // throw nlohmann's type_error, naming no file).
+    auto integer = [&](const char* field) -> long long {
+        if (!h.contains(field)) return -1;
+        if (!h[field].is_number_integer())
+            throw Error(file, field, "expected an integer, got " + h[field].dump());
+        return h[field].get<long long>();
+    };
     auto expect = [&](const char* field, double value) {
         if (!h.contains(field) || !h[field].is_number() || h[field].get<double>() != value)
             throw Error(
@@ -139,25 +148,40 @@ ImpulseTables ImpulseTables::load(const fs::path& path) {
     expect("g_nodes", kGNodes);
     expect("g_range", kGRange);
     expect("shift_bins", kShiftBins);
-    const int bounces = h.value("bounces", -1);
-    if (bounces < 1 || bounces > 1000) throw Error(file, "bounces", "expected 1 to 1000");
+    const long long bounces_field = integer("bounces");
+    if (bounces_field < 1 || bounces_field > 1000)
+        throw Error(file, "bounces", "expected 1 to 1000");
+    const int bounces = int(bounces_field);
     const char* bytes_data = text.data() + l2 + 1;
     const size_t bytes_size = text.size() - l2 - 1;
     const size_t bins = ZhDistanceTable::kBins;
     const size_t expected = payload_floats(bounces);
     const size_t expected_bytes = expected * sizeof(float) + payload_halves() * sizeof(Imath::half);
-    if (bytes_size != expected_bytes || h.value("payload_floats", size_t(0)) != expected ||
-        h.value("payload_halves", size_t(0)) != payload_halves())
+    const long long floats_field = integer("payload_floats");
+    const long long halves_field = integer("payload_halves");
+    if (bytes_size != expected_bytes || floats_field != (long long)expected ||
+        halves_field != (long long)payload_halves())
         throw Error(file, "payload",
                     "expected " + std::to_string(expected_bytes) + " bytes, the file has " +
                         std::to_string(bytes_size) + " (truncated?)");
-    if (h.value("checksum", std::string()) != std::to_string(fnv1a_words(bytes_data, bytes_size)))
+    const std::string checksum =
+        h.contains("checksum") && h["checksum"].is_string() ? h["checksum"].get<std::string>() : "";
+    if (checksum != std::to_string(fnv1a_words(bytes_data, bytes_size)))
         throw Error(file, "checksum", "the payload does not match its checksum (damaged file)");
     std::vector<float> payload(expected);
     std::memcpy(payload.data(), bytes_data, expected * sizeof(float));
     std::vector<Imath::half> halves(payload_halves());
     std::memcpy(halves.data(), bytes_data + expected * sizeof(float),
                 halves.size() * sizeof(Imath::half));
+    // A checksum vouches for the bytes, not for the tables: a NaN written by a broken build
+    // would reach every bake (issue "Reliability": NaN never leaks silently).
+    for (size_t k = 0; k < payload.size(); ++k)
+        if (!std::isfinite(payload[k]))
+            throw Error(file, "payload", "value " + std::to_string(k) + " is not finite (NaN/Inf)");
+    for (size_t k = 0; k < halves.size(); ++k)
+        if (!std::isfinite(float(halves[k])))
+            throw Error(file, "payload",
+                        "half value " + std::to_string(k) + " is not finite (NaN/Inf)");
     const Imath::half* hp = halves.data();
     const float* p = payload.data();
     ImpulseTables t;

@@ -1,8 +1,11 @@
 #include "volume/vdb_reader.h"
 
 #include <cmath>
+#include <cstdint>
+#include <exception>
 #include <filesystem>
 #include <mutex>
+#include <new>
 
 #include <openvdb/openvdb.h>
 
@@ -29,11 +32,19 @@ VdbDensity read_vdb_density(const std::string& file, const std::string& grid_nam
     std::vector<std::string> names;
     try {
         openvdb::io::File vdb(file);
-        vdb.open();
+        vdb.open(/*delayLoad=*/false);  // the delayed-load index trusts the file (fuzz_vdb)
         for (auto it = vdb.beginName(); it != vdb.endName(); ++it) names.push_back(it.gridName());
         if (vdb.hasGrid(grid_name)) base = vdb.readGrid(grid_name);
         vdb.close();
     } catch (const openvdb::Exception& e) {
+        throw Error(scene_file, field + ".file",
+                    "cannot read VDB file '" + file + "': " + e.what());
+    } catch (const std::bad_alloc&) {
+        // OpenVDB allocates the block sizes a file declares (fuzz_vdb: 2^60 bytes).
+        throw Error(scene_file, field + ".file",
+                    "cannot read VDB file '" + file +
+                        "': it declares more memory than this machine has (damaged file?)");
+    } catch (const std::exception& e) {  // std::ios_base::failure, length_error, ...
         throw Error(scene_file, field + ".file",
                     "cannot read VDB file '" + file + "': " + e.what());
     }
@@ -57,10 +68,13 @@ VdbDensity read_vdb_density(const std::string& file, const std::string& grid_nam
     const openvdb::CoordBBox box = grid->evalActiveVoxelBoundingBox();
     if (box.empty())
         throw Error(scene_file, field + ".grid", "grid '" + grid_name + "' has no active voxel");
-    const openvdb::Coord dim = box.dim();
-    if (double(dim.x()) * dim.y() * dim.z() > double(1 << 27))
+    // The extent in 64 bits first: Coord::dim() overflows int for a box across the index space.
+    double span = 1.0;
+    for (int a = 0; a < 3; ++a) span *= double(int64_t(box.max()[a]) - box.min()[a] + 1);
+    if (span > double(1 << 27))
         throw Error(scene_file, field + ".grid",
                     "grid '" + grid_name + "' spans more than 2^27 voxels; expected a smaller one");
+    const openvdb::Coord dim = box.dim();
     VdbDensity out;
     out.resolution = ivec3(dim.x(), dim.y(), dim.z());
     out.voxels.resize(size_t(dim.x()) * dim.y() * dim.z());
@@ -85,6 +99,14 @@ VdbDensity read_vdb_density(const std::string& file, const std::string& grid_nam
         vec3(std::min(lo.x(), hi.x()), std::min(lo.y(), hi.y()), std::min(lo.z(), hi.z()));
     out.box_max =
         vec3(std::max(lo.x(), hi.x()), std::max(lo.y(), hi.y()), std::max(lo.z(), hi.z()));
+    for (int a = 0; a < 3; ++a)
+        if (!std::isfinite(out.box_min[a]) || !std::isfinite(out.box_max[a]) ||
+            !(out.box_max[a] > out.box_min[a]) || std::fabs(out.box_min[a]) > 1e12f ||
+            std::fabs(out.box_max[a]) > 1e12f)
+            throw Error(scene_file, field + ".grid",
+                        "grid '" + grid_name +
+                            "' has a voxel size or offset whose world box is degenerate or "
+                            "beyond 1e12 units; expected a finite, non-empty box");
     return out;
 }
 

@@ -1,0 +1,47 @@
+// libFuzzer target (issue "Reliability"): an environment map file read as the scene loader
+// reads it (image/image_io.h, finite texels required) and turned into the importance-sampled
+// map every method lights with (scene/light.h). Built twice, FUZZ_ENV_EXTENSION ".exr" and
+// ".hdr" (OpenImageIO picks its reader by the extension). Bad input must end in
+// freqlab::Error; a map that loads must give finite radiance and pdf.
+#include <cmath>
+
+#include <OpenImageIO/imageio.h>
+
+#include "base/error.h"
+#include "fuzz_support.h"
+#include "scene/light.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    using namespace freqlab;
+    const std::string path = write_fuzz_input(data, size, FUZZ_ENV_EXTENSION);
+    // Inputs whose header promises more than 2^18 values are left out: their first read
+    // touches up to 1 GB (the limit read_rgb_image enforces, tested in test_bad_input) and
+    // would bring the run to ~100 inputs a second; the header paths stay in.
+    if (auto probe = OIIO::ImageInput::create(path, false)) {
+        OIIO::ImageSpec spec;
+        if (probe->open(path, spec) &&
+            double(spec.width) * spec.height * spec.nchannels > double(1 << 18))
+            return 0;
+    }
+    try {
+        auto image = std::make_shared<RgbImage>(read_rgb_image(path, true));
+        const EnvironmentMap env(path, image, 30.0f, 1.0f);
+        for (int i = 0; i < 8; ++i) {
+            const float a = float(i) / 8.0f;
+            vec3 direction;
+            float pdf = 0.0f;
+            const vec3 radiance = env.sample(vec4(a, 1.0f - a, 0.5f * a, 0.3f), &direction, &pdf);
+            if (std::getenv("FREQLAB_FUZZ_VERBOSE"))
+                std::fprintf(stderr, "%dx%d radiance %g %g %g pdf %g\n", image->width,
+                             image->height, radiance.x, radiance.y, radiance.z, pdf);
+            FUZZ_REQUIRE(std::isfinite(radiance.x + radiance.y + radiance.z) &&
+                         std::isfinite(pdf) && pdf >= 0.0f);
+            float eval_pdf = 0.0f;
+            const vec3 seen = env.eval_with_pdf(direction, &eval_pdf);
+            FUZZ_REQUIRE(std::isfinite(seen.x + seen.y + seen.z) && std::isfinite(eval_pdf));
+        }
+    } catch (const Error& e) {
+        fuzz_report(e);
+    }
+    return 0;
+}

@@ -1,0 +1,174 @@
+// Regression tests of what the fuzzers found (issue "Reliability", tests/fuzz): each input
+// once crashed, hung, leaked an exception that named no file, or let a non-finite value
+// through; each must now end in a freqlab::Error naming the file and the field.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include "base/error.h"
+#include "image/image_file_check.h"
+#include "image/image_io.h"
+#include "render/frame_renderer.h"
+#include "scene/json_reader.h"
+#include "scene/light.h"
+#include "session/session_file.h"
+#include "volume/impulse_tables.h"
+
+using namespace freqlab;
+namespace fs = std::filesystem;
+
+namespace {
+
+template <class F>
+Error expect_error(F&& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e;
+    }
+    ADD_FAILURE() << "no Error";
+    return Error("", "", "");
+}
+
+fs::path temp_file(const std::string& name) {
+    return fs::temp_directory_path() / ("freqlab_fuzz_findings_" + name);
+}
+
+std::string read_bytes(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+void write_bytes(const fs::path& p, const std::string& bytes) {
+    std::ofstream(p, std::ios::binary) << bytes;
+}
+
+}  // namespace
+
+// nlohmann's const operator[] past an array's end is undefined (fuzz_session: "range": []).
+TEST(FuzzFindings, JsonArrayIndexPastTheEndNamesTheField) {
+    const nlohmann::json doc = nlohmann::json::parse(R"({"range": [1]})");
+    const JsonReader r(doc, "s.json", "");
+    const Error e = expect_error([&] { r.get("range").at(1); });
+    EXPECT_EQ(e.file(), "s.json");
+    EXPECT_EQ(e.field(), "range");
+    EXPECT_NE(std::string(e.what()).find("at least 2 elements"), std::string::npos) << e.what();
+    const Error n = expect_error([&] { r.get("range").at(0).at(0); });
+    EXPECT_EQ(n.field(), "range[0]");
+}
+
+SessionFile valid_session() {
+    RenderConfig config;
+    SessionFile s;
+    s.scene = "builtin:default";
+    s.method = "mis";
+    s.layer = "color";
+    s.settings = config.settings_group().to_json();
+    return s;
+}
+
+TEST(FuzzFindings, SessionFileRoundTripsAndRefusesBadFieldsByName) {
+    SessionFile s = valid_session();
+    s.zoom = 3.0f;
+    s.insets = {{1, 2, 30, 40}};
+    const SessionFile back = read_session_file(session_json(s).dump(), "s.json");
+    EXPECT_EQ(back.zoom, 3.0f);
+    ASSERT_EQ(back.insets.size(), 1u);
+    EXPECT_EQ(back.insets[0].height, 40);
+    struct Case {
+        const char* key;
+        nlohmann::json value;
+        const char* field;
+    };
+    const Case cases[] = {{"range", nlohmann::json::array(), "range"},
+                          {"range", 5, "range"},
+                          {"centre", {0.5}, "centre"},
+                          {"zoom", 0, "zoom"},
+                          {"insets", {{1, 2}}, "insets[0]"},
+                          {"method", "nonsense", "method"},
+                          {"bake", nlohmann::json::object(), "bake"}};
+    for (const Case& c : cases) {
+        nlohmann::json j = session_json(s);
+        j[c.key] = c.value;
+        const Error e = expect_error([&] { read_session_file(j.dump(), "s.json"); });
+        EXPECT_EQ(e.file(), "s.json") << c.key;
+        EXPECT_EQ(e.field(), c.field) << e.what();
+    }
+}
+
+// An EXR attribute declaring 1.8 GB in a 600-byte file: OpenEXR allocated it (fuzz_env_exr).
+TEST(FuzzFindings, ExrAttributeLargerThanTheFileIsRefused) {
+    const fs::path p = temp_file("attribute.exr");
+    LayerSet layers(4, 2);
+    layers.add("color", LayerKind::Color, 3);
+    write_exr(p, layers);
+    std::string bytes = read_bytes(p);
+    const size_t at = bytes.find("channels");
+    ASSERT_NE(at, std::string::npos);
+    const size_t size_at = at + std::strlen("channels") + 1 + std::strlen("chlist") + 1;
+    const int32_t huge = 1845493779;
+    std::memcpy(&bytes[size_at], &huge, 4);
+    write_bytes(p, bytes);
+    const Error e = expect_error([&] { read_rgb_image(p); });
+    EXPECT_EQ(e.file(), p.string());
+    EXPECT_EQ(e.field(), "header.channels");
+    EXPECT_NE(std::string(e.what()).find("1845493779"), std::string::npos) << e.what();
+    const Error x = expect_error([&] { read_exr(p); });
+    EXPECT_EQ(x.field(), "header.channels");
+    fs::remove(p);
+}
+
+// OpenImageIO buffers a whole compression chunk (DWAB: 256 rows) of a 2 x 1e6 image: 2.3 GB.
+TEST(FuzzFindings, ImageSizeLimitsNameTheResolution) {
+    EXPECT_NO_THROW(check_image_size("a.exr", 8192, 4096, 4));
+    const Error wide = expect_error([] { check_image_size("a.exr", 2162692, 2, 1); });
+    EXPECT_EQ(wide.field(), "resolution");
+    EXPECT_EQ(wide.file(), "a.exr");
+    const Error big = expect_error([] { check_image_size("a.exr", 16384, 8192, 3); });
+    EXPECT_NE(std::string(big.what()).find("2^28"), std::string::npos) << big.what();
+    EXPECT_EQ(expect_error([] { check_image_size("a.exr", 0, 8, 3); }).field(), "resolution");
+}
+
+// A finite 1.7e38 texel in an HDR file made every estimate Inf (fuzz_env_hdr).
+TEST(FuzzFindings, EnvironmentTexelBeyondTheLimitIsRefused) {
+    auto image = std::make_shared<RgbImage>(*constant_latlong(vec3(1.0f), 8, 4));
+    EXPECT_NO_THROW(EnvironmentMap("ok.hdr", image, 0.0f, 1e19f));
+    const Error scaled = expect_error([&] { EnvironmentMap("ok.hdr", image, 0.0f, 1e21f); });
+    EXPECT_EQ(scaled.file(), "ok.hdr");
+    EXPECT_EQ(scaled.field(), "pixel (0, 0)");
+    image->pixels[8 * 2 + 5] = vec3(0.0f, 1.7e38f, 0.0f);
+    const Error e = expect_error([&] { EnvironmentMap("map.hdr", image, 0.0f, 1.0f); });
+    EXPECT_EQ(e.field(), "pixel (5, 2)");
+    EXPECT_NE(std::string(e.what()).find("1.7e+38"), std::string::npos) << e.what();
+}
+
+// A header field of another type threw nlohmann's type_error, naming no file.
+TEST(FuzzFindings, ImpulseTableHeaderFieldsOfAnotherTypeNameTheField) {
+    const fs::path p = temp_file("tables.bin");
+    const std::string good =
+        R"({"bins":256,"g_nodes":9,"g_range":0.6,"max_d":40.0,"min_d":0.001,"order":11,)"
+        R"("phase_terms":32,"shift_bins":8,"version":3)";
+    const std::pair<std::string, std::string> cases[] = {
+        {"[1, 2]", "header"},
+        {good + R"(,"bounces":"30"})", "bounces"},
+        {good + R"(,"bounces":30,"payload_floats":"x","payload_halves":1})", "payload_floats"}};
+    for (const auto& [header, field] : cases) {
+        write_bytes(p, "freqlab-impulse-tables\n" + header + "\n" + std::string(64, '\0'));
+        const Error e = expect_error([&] { ImpulseTables::load(p); });
+        EXPECT_EQ(e.file(), p.string());
+        EXPECT_EQ(e.field(), field) << e.what();
+    }
+    fs::remove(p);
+}
+
+// A number beyond double threw nlohmann's out_of_range through every JSON reader
+// (fuzz_scene_json, fuzz_session).
+TEST(FuzzFindings, JsonNumberBeyondDoubleIsAnError) {
+    const Error e = expect_error([] { JsonReader::parse(R"({"zoom": 1e99999})", "s.json"); });
+    EXPECT_EQ(e.file(), "s.json");
+    EXPECT_NE(std::string(e.what()).find("number overflow"), std::string::npos) << e.what();
+}
