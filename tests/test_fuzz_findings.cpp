@@ -17,6 +17,7 @@
 #include "scene/light.h"
 #include "session/session_file.h"
 #include "volume/impulse_tables.h"
+#include "volume/vdb_reader.h"
 
 using namespace freqlab;
 namespace fs = std::filesystem;
@@ -171,4 +172,33 @@ TEST(FuzzFindings, JsonNumberBeyondDoubleIsAnError) {
     const Error e = expect_error([] { JsonReader::parse(R"({"zoom": 1e99999})", "s.json"); });
     EXPECT_EQ(e.file(), "s.json");
     EXPECT_NE(std::string(e.what()).find("number overflow"), std::string::npos) << e.what();
+}
+
+// OpenVDB does not check its stream: a file cut short left a string length uninitialised and
+// the reader allocated gigabytes, or not, from run to run (fuzz_vdb). Every prefix of a valid
+// file must now be refused by name, and the whole file still read.
+TEST(FuzzFindings, EveryTruncatedVdbFileIsRefusedByName) {
+    VdbDensity g;
+    g.box_min = vec3(0.0f);
+    g.box_max = vec3(1.0f, 0.5f, 0.25f);
+    g.resolution = ivec3(8, 4, 2);
+    g.voxels.assign(64, 0.5f);
+    const fs::path whole = temp_file("whole.vdb");
+    write_vdb_density(whole.string(), "density", g);
+    const std::string bytes = read_bytes(whole);
+    ASSERT_GT(bytes.size(), 64u);
+    EXPECT_EQ(
+        read_vdb_density(whole.string(), "density", "s.json", "media[0].density").voxels.size(),
+        64u);
+    const fs::path cut = temp_file("cut.vdb");
+    int refused = 0;
+    for (size_t n = 0; n < bytes.size(); ++n) {
+        write_bytes(cut, bytes.substr(0, n));
+        const Error e = expect_error(
+            [&] { read_vdb_density(cut.string(), "density", "s.json", "media[0].density"); });
+        EXPECT_EQ(e.file(), "s.json") << n;
+        EXPECT_EQ(e.field().rfind("media[0].density.", 0), 0u) << n << ": " << e.what();
+        refused += e.message().find(cut.string()) != std::string::npos;
+    }
+    EXPECT_EQ(refused, int(bytes.size()));  // every message names the VDB file itself
 }

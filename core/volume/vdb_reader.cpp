@@ -4,9 +4,11 @@
 #include <cstdint>
 #include <exception>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <new>
 
+#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 
 #include "base/error.h"
@@ -31,14 +33,23 @@ VdbDensity read_vdb_density(const std::string& file, const std::string& grid_nam
     openvdb::GridBase::Ptr base;
     std::vector<std::string> names;
     try {
-        openvdb::io::File vdb(file);
-        vdb.open(/*delayLoad=*/false);  // the delayed-load index trusts the file (fuzz_vdb)
-        for (auto it = vdb.beginName(); it != vdb.endName(); ++it) names.push_back(it.gridName());
-        if (vdb.hasGrid(grid_name)) base = vdb.readGrid(grid_name);
-        vdb.close();
+        // A stream that throws on a short read: OpenVDB's readers do not check the stream, so
+        // a truncated file would leave string and array sizes uninitialised (fuzz_vdb: random
+        // multi-GB allocations). No delayed load: its index trusts the file.
+        std::ifstream in(file, std::ios::binary);
+        in.exceptions(std::ios::failbit | std::ios::badbit);
+        openvdb::io::Stream vdb(in, /*delayLoad=*/false);
+        for (const auto& g : *vdb.getGrids()) {
+            names.push_back(g->getName());
+            if (!base && g->getName() == grid_name) base = g;
+        }
     } catch (const openvdb::Exception& e) {
         throw Error(scene_file, field + ".file",
                     "cannot read VDB file '" + file + "': " + e.what());
+    } catch (const std::ios_base::failure&) {
+        throw Error(scene_file, field + ".file",
+                    "cannot read VDB file '" + file +
+                        "': it ends before the grid it declares does (truncated or damaged?)");
     } catch (const std::bad_alloc&) {
         // OpenVDB allocates the block sizes a file declares (fuzz_vdb: 2^60 bytes).
         throw Error(scene_file, field + ".file",
