@@ -146,6 +146,7 @@ int run_bake(const BakeArgs& args) {
 
     // Everything that can be wrong with the input is checked before any output exists.
     const Scene scene = load_scene(args.scene);
+    print_load_notes(scene);
     const Media media(scene.media, scene.source);
     std::unique_ptr<tbb::global_control> limit;
     if (args.threads > 0)
@@ -176,9 +177,13 @@ int run_bake(const BakeArgs& args) {
     }
     BakeStats stats = baker.stats();
     stats.tables_ms = tables_ms;
-    json report = {{"scene", args.scene},         {"method", to_string(method)},
-                   {"media", long(media.size())}, {"tables_loaded", bool(tables)},
-                   {"threads", args.threads},     {"settings", group.to_json()},
+    json report = {{"scene", args.scene},
+                   {"method", to_string(method)},
+                   {"media", long(media.size())},
+                   {"tables_loaded", bool(tables)},
+                   {"threads", args.threads},
+                   {"settings", group.to_json()},
+                   {"load_notes", scene.load_notes},
                    {"stats", stats.to_json()}};
     if (args.compare_surface && method != BakeMethod::Surface) {
         LightmapBaker surface(rays, media, nullptr, BakeMethod::Surface, settings);

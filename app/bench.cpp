@@ -56,9 +56,11 @@ int run_bench(const BenchArgs& a) {
     if (a.study == "bake") return run_bench_bake(a);
     if (a.study == "bake-thickness") return run_bench_bake_thickness(a);
     if (a.study == "sparse") return run_bench_sparse(a);
+    if (a.study == "stability") return run_bench_stability(a);
     if (a.study != "points")
-        throw Error("--study", a.study,
-                    "expected points, sparse, cache, cache-ablation, bake or bake-thickness");
+        throw Error(
+            "--study", a.study,
+            "expected points, sparse, cache, cache-ablation, bake, bake-thickness or stability");
     if (a.runs < 1) throw Error("--runs", std::to_string(a.runs), "expected at least 1");
     if (a.out.empty()) throw Error("--out", "", "expected an output directory");
     const Scene scene = load_scene(a.scene);

@@ -99,6 +99,11 @@ void print_debug_pixel(const FrameResult& r, const Scene& scene, int x, int y) {
 
 }  // namespace
 
+void print_load_notes(const Scene& scene) {
+    for (const std::string& note : scene.load_notes)
+        std::fprintf(stderr, "note: %s: %s\n", scene.source.c_str(), note.c_str());
+}
+
 int run_render(const RenderArgs& args) {
     RenderConfig config;
     config.method = parse_render_method(args.method);
@@ -126,6 +131,7 @@ int run_render(const RenderArgs& args) {
 
     // Everything that can be wrong with the input is checked before any output exists.
     const Scene scene = load_scene(args.scene);
+    print_load_notes(scene);
     const auto [first, last] = parse_frame_range(args.frames, scene.frame_count);
     std::pair<int, int> debug{-1, -1};
     if (!args.debug_pixel.empty())
@@ -183,6 +189,7 @@ int run_render(const RenderArgs& args) {
                         {"method", args.method},
                         {"threads", args.threads},
                         {"settings", settings.to_json()},
+                        {"load_notes", scene.load_notes},
                         {"frames", frames}};
     write_text_atomically(fs::path(args.out) / "stats.json", stats.dump(2) + "\n");
     if (!args.quiet)

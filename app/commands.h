@@ -7,6 +7,10 @@
 
 namespace freqlab {
 
+struct Scene;
+// Prints what the loader changed in the scene's input (Scene::load_notes) to stderr.
+void print_load_notes(const Scene& scene);
+
 struct RenderArgs {
     std::string scene = "builtin:default";
     std::string method = "gbuffer";
@@ -42,6 +46,8 @@ struct BenchArgs {
     int reference_spp = 4096;  // points: the stratified reference; bake: the VPT reference
     int max_spp = 1024;        // bake study: impulse and extinction curves
     int overhead_spp = 64;     // bake study: equal-sample overhead and re-bake
+    bool full = false;         // stability study: every declared extreme (takes longer)
+    bool quiet = false;        // stability study: no line per case
 };
 int run_bench(const BenchArgs& args);
 
@@ -64,6 +70,7 @@ int run_bench_cache(const BenchArgs& args);  // studies cache, cache-ablation (b
 int run_bench_bake(const BenchArgs& args);   // study bake (bench_bake.cpp)
 int run_bench_bake_thickness(const BenchArgs& args);  // study bake-thickness (bench_bake.cpp)
 int run_bench_sparse(const BenchArgs& args);          // study sparse (bench_sparse.cpp)
+int run_bench_stability(const BenchArgs& args);       // study stability (bench_stability.cpp)
 
 struct FigureArgs {
     std::string input;  // an EXR written by freqlab (or any EXR)

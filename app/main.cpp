@@ -165,7 +165,8 @@ int main(int argc, char** argv) {
         "points: adaptive radiance points vs fixed-N MIS; sparse: sparse vs points and "
         "equal-time MIS on one frame (time, rays, RMSE); cache: the cache vs sparse and "
         "equal-time MIS over frames; cache-ablation: temporal test on/off; bake: method B; "
-        "bake-thickness: method B's error against VPT as the media thicken");
+        "bake-thickness: method B's error against VPT as the media thicken; stability: every "
+        "setting and scene extreme over all methods, counting non-finite values per layer");
     bench->add_option("--frames", ba.frames, "cache studies: A:B (default: all frames)");
     bench->add_option("--error-every", ba.error_every,
                       "cache studies: RMSE against the reference every k-th frame");
@@ -179,6 +180,9 @@ int main(int argc, char** argv) {
     bench->add_option("--overhead-spp", ba.overhead_spp,
                       "bake study: samples of the overhead and re-bake runs");
     bench->add_option("--set", ba.sets, "key=value setting (repeatable)");
+    bench->add_flag("--full", ba.full,
+                    "stability study: every declared extreme, incl. the largest sample counts");
+    bench->add_flag("--quiet", ba.quiet, "stability study: no line per case");
     bench->add_option("--out", ba.out, "output directory (bench_points.json)");
 
     CLI11_PARSE(app, argc, argv);

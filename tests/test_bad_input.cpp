@@ -84,8 +84,8 @@ TEST(BadInput, MissingCamera) {
     expect_error("{\"objects\": [" + kPlane + "]}", "camera", "missing required field");
 }
 
-TEST(BadInput, EmptyObjects) {
-    expect_error(scene_with("[]"), "objects", "at least one object");
+TEST(BadInput, ObjectsNotAnArray) {
+    expect_error(scene_with("{}"), "objects", "array");
 }
 
 TEST(BadInput, Vector3WrongLength) {

@@ -100,3 +100,30 @@ TEST(Covariance, OccludedClosedForms) {
                    "seed (sigma_S^o)^2 at -k, times c_v^2");
     }
 }
+
+TEST(Covariance, BroadestLobeIsTheLimitOfLargeB) {
+    // A Phong-like exponent of 0 (GGX / Beckmann roughness 1) gives b = 4 pi^2 / 0 = inf: the
+    // chain must take its limit, the closed forms' b -> inf values, not inf / inf (the stability
+    // sweep's finding: NaN bandwidths at roughness 1, guarded to black radiance points).
+    for (uint64_t key = 0; key < 100; ++key) {
+        CovarianceInputs in = random_inputs(3000 + key);
+        in.b = phong_bandwidth_b(0.0);
+        ASSERT_TRUE(std::isinf(in.b));
+        const CovarianceResult u = unoccluded_covariance(in), o = occluded_covariance_limit(in);
+        const double s = in.sigma_l2, cv = in.inv_cos_view, ci = in.cos_in, k = in.curvature,
+                     d = in.eye_distance, t = in.t_min;
+        // Unoccluded: s / (1 + b s) -> 0, every entry (up to the rounding of S_c - u u^T / tau).
+        for (int c = 0; c < 2; ++c)
+            for (int r = 0; r < 2; ++r)
+                EXPECT_NEAR(u.object[c][r], 0.0, 1e-12 * s * (1 + cv * cv) * (1 + k * k));
+        // Occluded: 1/b -> 0 angular; spatial c_v^2 c_i^2 s / t^2; image c_v^2 c_i^2 d^2 s / t^2.
+        expect_rel(o.object[1][1], 0.0, "(sigma_theta^o)^2 -> 0");
+        expect_rel(o.object[0][0], cv * cv * ci * ci * s / (t * t), "(sigma_S^o)^2 at b = inf");
+        expect_rel(o.image[1][1], cv * cv * ci * ci * d * d * s / (t * t),
+                   "sigma_theta^2 at b = inf");
+        // And the chain at a large finite b approaches it.
+        in.b = 1e12;
+        const CovarianceResult near = occluded_covariance_limit(in);
+        EXPECT_NEAR(near.object[0][0], o.object[0][0], 1e-6 * std::max(1.0, o.object[0][0]));
+    }
+}

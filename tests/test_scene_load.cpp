@@ -3,8 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 
+#include "accel/ray_scene.h"
+#include "image/image_io.h"
+#include "render/frame_renderer.h"
 #include "scene/scene_loader.h"
+#include "volume/lightmap_baker.h"
+#include "volume/media.h"
 
 namespace fs = std::filesystem;
 using namespace freqlab;
@@ -86,4 +92,59 @@ TEST(SceneLoad, DegenerateTrianglesAreDroppedAndCounted) {
     clean_mesh(m, "inline", "mesh");
     EXPECT_EQ(m.triangles.size(), 1u);
     EXPECT_EQ(m.degenerate_removed, 2u);
+}
+
+TEST(SceneLoad, SceneWithoutObjectsShowsItsEnvironmentAndBakesNothing) {
+    const Scene scene = parse_scene(
+        R"({"camera": {"position": [0, -3, 1], "look_at": [0, 0, 1], "fov": 50}, "objects": [],
+            "lights": [{"type": "envmap", "radiance": [0.25, 0.5, 0.75]}]})",
+        "empty.json", "");
+    EmbreeDevice device(1);
+    RenderConfig config;
+    config.method = RenderMethod::Mis;
+    config.frame.width = 4;
+    config.frame.height = 3;
+    FrameRenderer renderer(scene, config, device);
+    Progress progress;
+    const FrameResult r = renderer.render(0, progress);
+    const Layer& color = r.layers.get("color");
+    for (size_t i = 0; i < color.data.size(); ++i)
+        EXPECT_FLOAT_EQ(color.data[i], 0.25f * float(1 + i % 3)) << "value " << i;
+    EXPECT_EQ(count_nonfinite(r.layers), 0);
+    RayScene rays(scene, device);
+    rays.update(0.0f);
+    const Media media;
+    LightmapBaker baker(rays, media, nullptr, BakeMethod::Surface, BakeSettings{});
+    baker.run();
+    EXPECT_TRUE(baker.lightmaps().empty());
+    // No geometry, no bounds to lay probes over: none, and the grid says so.
+    EXPECT_TRUE(baker.probes().empty());
+    EXPECT_EQ(baker.probes_json()["grid"], nlohmann::json({0, 0, 0}));
+}
+
+TEST(SceneLoad, LoadNotesNameWhatTheLoaderChanged) {
+    const fs::path dir = fs::temp_directory_path() / "freqlab_load_notes";
+    fs::create_directories(dir);
+    std::ofstream(dir / "tri.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\n";
+    LayerSet env(4, 2);
+    Layer& c = env.add("color", LayerKind::Color, 3);
+    std::fill(c.data.begin(), c.data.end(), 1.0f);
+    c.data[3 * 5 + 1] = -0.25f;  // pixel (1, 1), green
+    write_exr(dir / "env.exr", env);
+    const Scene scene = parse_scene(
+        R"({"camera": {"position": [0, -3, 1], "look_at": [0, 0, 1], "fov": 50},
+            "objects": [{"name": "tri", "mesh": "tri.obj", "material": {"type": "lambert"}}],
+            "lights": [{"type": "envmap", "file": "env.exr"}]})",
+        "notes.json", dir.string());
+    ASSERT_EQ(scene.load_notes.size(), 2u);
+    EXPECT_EQ(scene.load_notes[0],
+              "objects[0] 'tri': 1 zero-area or out-of-range triangles dropped");
+    EXPECT_EQ(
+        scene.load_notes[1],
+        "lights[0].file 'env.exr': 1 texels with negative radiance (down to -0.25) read as 0");
+    const EnvironmentMap& map = *scene.environment();
+    EXPECT_EQ(map.negative_texels(), 1);
+    // The texel is read as 0 in that channel, its others kept.
+    const vec3 d = map.uv_to_direction(vec2(1.5f / 4, 1.5f / 2));
+    EXPECT_EQ(map.eval(d), vec3(1.0f, 0.0f, 1.0f));
 }

@@ -15,10 +15,14 @@ Mat2 apply(const Mat2& op, const Mat2& s) {
     return glm::transpose(op) * s * op;
 }
 
+// S_rho = S_c - b u u^T / (1 + b tau), u = S_c e2, tau = u_2 (S_c symmetric), written with 1/b
+// so that the broadest lobe (b = inf: a Phong exponent of 0, GGX / Beckmann roughness 1) takes
+// its limit S_c - u u^T / tau instead of inf / inf.
 Mat2 brdf_step(const Mat2& sc, double b) {
-    const Mat2 B = brdf_operator(b);
-    const double trace = (glm::transpose(sc) * B)[0][0] + (glm::transpose(sc) * B)[1][1];
-    return sc - (glm::transpose(sc) * B * sc) / (1.0 + trace);
+    const glm::dvec2 u = sc[1];  // column 1 = S_c e2
+    const double denominator = 1.0 / b + u.y;
+    if (!(denominator > 0.0)) return sc;  // tau = 0 (then u = 0): nothing for the BRDF to filter
+    return sc - glm::outerProduct(u, u) / denominator;
 }
 
 CovarianceResult finish(const CovarianceInputs& in, const Mat2& s_rho) {
@@ -69,8 +73,8 @@ CovarianceResult occluded_covariance_limit(const CovarianceInputs& in) {
     const glm::dvec2 p(in.cos_in - in.curvature * t, -t), q(in.curvature, 1.0);
     const Mat2 pp = glm::outerProduct(p, p), pq = glm::outerProduct(q, p) + glm::outerProduct(p, q),
                qq = glm::outerProduct(q, q);
-    const Mat2 s_rho =
-        (1.0 + b * s * q.y * q.y) / (b * p.y * p.y) * pp - (s * q.y / p.y) * pq + s * qq;
+    // (1 + b s q2^2) / b written as 1/b + s q2^2: finite for b = inf (the broadest lobe).
+    const Mat2 s_rho = (1.0 / b + s * q.y * q.y) / (p.y * p.y) * pp - (s * q.y / p.y) * pq + s * qq;
     return finish(in, s_rho);
 }
 

@@ -74,7 +74,15 @@ EnvironmentMap::EnvironmentMap(std::string source, std::shared_ptr<const RgbImag
         const float sin_theta = std::sin(kPi * (y + 0.5f) / h);
         for (int x = 0; x < w; ++x) {
             const size_t i = size_t(y) * w + x;
-            texels_[i].radiance = glm::max(image_->pixels[i], vec3(0.0f)) * scale_;
+            const vec3& texel = image_->pixels[i];
+            // Radiance is >= 0: a negative texel (ringing of a resampled map; Blender's
+            // city.exr has them) is read as 0 and counted, so that the loader can say so.
+            const float lowest = std::min(texel.x, std::min(texel.y, texel.z));
+            if (lowest < 0.0f) {
+                ++negative_texels_;
+                most_negative_ = std::min(most_negative_, lowest);
+            }
+            texels_[i].radiance = glm::max(texel, vec3(0.0f)) * scale_;
             const vec3& r = texels_[i].radiance;
             const float peak = std::max(r.x, std::max(r.y, r.z));
             if (!(peak <= kMaxEnvironmentRadiance))  // also NaN from a NaN scale

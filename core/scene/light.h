@@ -22,7 +22,8 @@ namespace freqlab {
 // an environment sample's radiance is one texel read (no trigonometry), and estimator and
 // pdf agree exactly. What a camera or a mirror sees directly is interpolated bilinearly
 // (eval_smooth) so backgrounds do not look blocky; that radiance is not integrated.
-// Negative texels (some HDR files have them) are clamped to 0 on load. A texel brighter than
+// Negative texels (some HDR files have them) are read as 0 on load and counted
+// (negative_texels(); the scene loader reports them in Scene::load_notes). A texel brighter than
 // kMaxEnvironmentRadiance (after scale) is refused (Error naming the map and the pixel): a
 // finite 1e38 in an HDR file turns every estimate into Inf (found by fuzz_env_hdr).
 constexpr float kMaxEnvironmentRadiance = 1e20f;
@@ -84,6 +85,8 @@ class EnvironmentMap {
     // The map as it stands at `time` (a copy turned by spin x time; same texels).
     std::shared_ptr<const EnvironmentMap> at_time(float time) const;
     float scale() const { return scale_; }
+    long negative_texels() const { return negative_texels_; }  // read as 0
+    float most_negative() const { return most_negative_; }     // their lowest channel (or 0)
     const Distribution2D& distribution() const { return distribution_; }
     vec2 direction_to_uv(const vec3& d) const;
     vec3 uv_to_direction(vec2 uv) const;
@@ -98,6 +101,8 @@ class EnvironmentMap {
         float pdf_uv;   // sampling density over [0,1)^2: read with the radiance, one miss
     };
     HugePageVector<Texel> texels_;  // read at random by every sample
+    long negative_texels_ = 0;
+    float most_negative_ = 0.0f;
     float rotation_deg_, scale_, spin_deg_per_s_ = 0.0f;
     Distribution2D distribution_;
 };

@@ -40,6 +40,10 @@ struct Scene {
     std::vector<SceneObject> objects;
     std::vector<Light> lights;
     std::vector<MediumDesc> media;  // method B's participating media (empty: none)
+    // What the loader changed in the input, each naming where ("objects[2] 'x': 3 zero-area
+    // triangles dropped"): the CLI prints them and writes them to stats.json, the workbench
+    // shows them; nothing is changed silently.
+    std::vector<std::string> load_notes;
 
     float time_of_frame(int frame) const { return float(frame) / fps; }
     bool is_static() const;  // nothing moves: no object animation, static camera

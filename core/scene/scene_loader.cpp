@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 
@@ -315,7 +316,7 @@ Scene parse_scene(const std::string& text, const std::string& origin,
 
     const JsonReader objects = root.get("objects");
     const size_t nobj = objects.array_size();
-    if (nobj == 0) objects.fail("expected at least one object");
+    // No objects is a scene too (an environment on its own): every method sees only misses.
     for (size_t i = 0; i < nobj; ++i) {
         const JsonReader o = objects.at(i);
         o.only_keys(
@@ -373,6 +374,10 @@ Scene parse_scene(const std::string& text, const std::string& origin,
                 obj.animation.spin_rad_per_s =
                     glm::radians(float(a.get("spin_deg_per_s").number()));
         }
+        if (obj.mesh && obj.mesh->degenerate_removed > 0)
+            scene.load_notes.push_back(o.path() + " '" + obj.name +
+                                       "': " + std::to_string(obj.mesh->degenerate_removed) +
+                                       " zero-area or out-of-range triangles dropped");
         scene.objects.push_back(std::move(obj));
     }
 
@@ -385,6 +390,14 @@ Scene parse_scene(const std::string& text, const std::string& origin,
             if (env && has_env)
                 lights.at(i).fail("only one environment-like light (envmap or sky) per scene");
             has_env = has_env || env;
+            if (l.environment && l.environment->negative_texels() > 0) {
+                char lowest[32];
+                std::snprintf(lowest, sizeof lowest, "%g", double(l.environment->most_negative()));
+                scene.load_notes.push_back(
+                    lights.at(i).path() + ".file '" + l.environment->source() +
+                    "': " + std::to_string(l.environment->negative_texels()) +
+                    " texels with negative radiance (down to " + lowest + ") read as 0");
+            }
             scene.lights.push_back(std::move(l));
         }
     }

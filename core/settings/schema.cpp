@@ -1,6 +1,7 @@
 #include "settings/schema.h"
 
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 
 #include "base/error.h"
@@ -43,7 +44,7 @@ std::string SettingsSchema::describe_range(const SettingField& f) const {
             return ss.str();
         }
         case SettingType::Int:
-            ss << "an integer in [" << f.min << ", " << f.max << "]";
+            ss << "an integer in [" << (long long)f.min << ", " << (long long)f.max << "]";
             break;
         case SettingType::Float:
             ss << "a number in [" << f.min << ", " << f.max << "]";
@@ -80,7 +81,10 @@ void SettingsSchema::set_value(void* object, const SettingField& f, double v,
     const bool integral = f.type != SettingType::Float;
     if (!std::isfinite(v) || v < f.min || v > f.max || (integral && v != std::floor(v))) {
         std::ostringstream got;
-        got << v;
+        if (integral && std::isfinite(v) && std::fabs(v) < 9e18)
+            got << std::setprecision(17) << v;  // an integer past 1e6 keeps all its digits
+        else
+            got << v;
         throw Error(origin, where, "expected " + describe_range(f) + ", got " + got.str());
     }
     f.set(object, v);

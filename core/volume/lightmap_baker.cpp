@@ -48,8 +48,12 @@ LightmapBaker::LightmapBaker(const RayScene& scene, const Media& media, const Im
     atlas.backface_tolerance = settings.backface_tolerance;
     maps_ = build_lightmaps(scene, atlas);
     stats_.atlas_ms = ms_since(t0);
-    if (settings.probes_x > 0 && settings.probes_y > 0 && settings.probes_z > 0) {
-        const vec3 lo = scene.bounds_min(), hi = scene.bounds_max();
+    const vec3 lo = scene.bounds_min(), hi = scene.bounds_max();
+    // A scene without geometry has no bounds to lay probes over: it gets none (and says so).
+    const bool bounded = glm::all(glm::lessThanEqual(lo, hi)) && std::isfinite(hi.x - lo.x) &&
+                         std::isfinite(hi.y - lo.y) && std::isfinite(hi.z - lo.z);
+    if (bounded && settings.probes_x > 0 && settings.probes_y > 0 && settings.probes_z > 0) {
+        probe_grid_ = ivec3(settings.probes_x, settings.probes_y, settings.probes_z);
         const vec3 centre = 0.5f * (lo + hi), half = 0.45f * (hi - lo);
         const ivec3 n(settings.probes_x, settings.probes_y, settings.probes_z);
         for (int z = 0; z < n.z; ++z)
@@ -202,7 +206,7 @@ nlohmann::json LightmapBaker::probes_json() const {
     }
     return {{"order", 3},
             {"basis", "real SH, y_l^m of core/math/sh.h (index l(l+1)+m), incident radiance"},
-            {"grid", {settings_.probes_x, settings_.probes_y, settings_.probes_z}},
+            {"grid", {probe_grid_.x, probe_grid_.y, probe_grid_.z}},
             {"spp", samples_},
             {"probes", list}};
 }

@@ -80,6 +80,7 @@ class LightmapBaker {
     std::vector<std::vector<BakeEstimator::FixedDirect>> fixed_;
     std::unique_ptr<VertexCorrectionField> corrections_;
     std::vector<vec3> probe_positions_;
+    ivec3 probe_grid_{0};  // the probes laid out (0: none, e.g. a scene without geometry)
     std::vector<BakeEstimator::ProbeParts> probe_sums_;
     int samples_ = 0;
     BakeStats stats_;
