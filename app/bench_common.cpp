@@ -3,18 +3,33 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/error.h"
+
 namespace freqlab {
 
 int equal_time_mis_spp(const Scene& scene, const std::function<RenderConfig(int spp)>& mis_config,
                        const EmbreeDevice& device, int frame, double target_ms,
                        Progress& progress) {
+    constexpr int kLow = 8, kHigh = 64, kTimings = 3;
     auto time_at = [&](int spp) {
         FrameRenderer r(scene, mis_config(spp), device);
         r.render(frame, progress);  // warm
-        return r.render(frame, progress).stats["time_ms"].get<double>();
+        std::vector<double> t;
+        for (int i = 0; i < kTimings; ++i)
+            t.push_back(r.render(frame, progress).stats["time_ms"].get<double>());
+        return median(t);
     };
-    const double t8 = time_at(8), t32 = time_at(32);
-    const double per_spp = std::max((t32 - t8) / 24.0, 1e-6), t_0 = t8 - 8.0 * per_spp;
+    const double t_low = time_at(kLow), t_high = time_at(kHigh);
+    // A frame too small for its samples to show in the time (or a hiccup of a noisy machine)
+    // gives no slope to extrapolate: refused, not replaced by a guess.
+    if (!(t_high > t_low))
+        throw Error("--size", "",
+                    "MIS frames at " + std::to_string(kLow) + " and " + std::to_string(kHigh) +
+                        " spp took " + std::to_string(t_low) + " and " + std::to_string(t_high) +
+                        " ms (medians of " + std::to_string(kTimings) +
+                        "): no time per sample to reach the equal-time count from; use a "
+                        "larger frame");
+    const double per_spp = (t_high - t_low) / double(kHigh - kLow), t_0 = t_low - kLow * per_spp;
     return std::max(1, int(std::floor((target_ms - t_0) / per_spp)));
 }
 

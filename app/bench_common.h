@@ -9,8 +9,9 @@
 
 namespace freqlab {
 
-// The MIS sample count whose frame takes `target_ms`: frames at 8 and 32 spp (each rendered
-// twice, the first warms caches) fit t(spp) = t_0 + c spp, t_0 being the G-buffer and set-up.
+// The MIS sample count whose frame takes `target_ms`: frames at 8 and 64 spp (a warm-up, then
+// the median of 3 timings each) fit t(spp) = t_0 + c spp, t_0 being the G-buffer and set-up.
+// Throws Error when the two times give no positive slope.
 // `mis_config(spp)` builds the MIS configuration at a sample count.
 int equal_time_mis_spp(const Scene& scene, const std::function<RenderConfig(int spp)>& mis_config,
                        const EmbreeDevice& device, int frame, double target_ms, Progress& progress);

@@ -1,11 +1,14 @@
 // freqlab: the workbench and its command line (DESIGN.md "Command line").
 #include <CLI/CLI.hpp>
 
+#include <csignal>
+
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 
 #include "base/error.h"
+#include "base/job.h"
 #include "commands.h"
 #include "render/method.h"
 #include "volume/bake_estimators.h"
@@ -48,6 +51,13 @@ int headless_fallback(const std::string& scene, int frame) {
 }
 
 }  // namespace
+
+// Ctrl-C / SIGTERM: the command stops at its next checkpoint (files written so far are
+// complete, the one being written is finished or never appears); a second one kills at once.
+extern "C" void cancel_on_signal(int signal_number) {
+    freqlab::request_process_cancel();
+    std::signal(signal_number, SIG_DFL);
+}
 
 int main(int argc, char** argv) {
     CLI::App app{"freqlab — a workbench for frequency-space light-transport caching"};
@@ -186,6 +196,11 @@ int main(int argc, char** argv) {
     bench->add_option("--out", ba.out, "output directory (bench_points.json)");
 
     CLI11_PARSE(app, argc, argv);
+    const bool command_line = *render || *compare || *figure || *tables || *bake || *bench;
+    if (command_line) {
+        std::signal(SIGINT, cancel_on_signal);
+        std::signal(SIGTERM, cancel_on_signal);
+    }
     try {
         if (*render) return freqlab::run_render(r);
         if (*compare) return freqlab::run_compare(c);
@@ -232,6 +247,11 @@ int main(int argc, char** argv) {
     } catch (const freqlab::Error& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return 1;
+    } catch (const freqlab::Cancelled&) {
+        std::fprintf(stderr,
+                     "\ncancelled: the files written before are complete; nothing "
+                     "half-written was left\n");
+        return 130;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return 1;

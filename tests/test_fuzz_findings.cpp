@@ -17,6 +17,7 @@
 #include "scene/light.h"
 #include "session/session_file.h"
 #include "volume/impulse_tables.h"
+#include "volume/vdb_file_check.h"
 #include "volume/vdb_reader.h"
 
 using namespace freqlab;
@@ -201,4 +202,57 @@ TEST(FuzzFindings, EveryTruncatedVdbFileIsRefusedByName) {
         refused += e.message().find(cut.string()) != std::string::npos;
     }
     EXPECT_EQ(refused, int(bytes.size()));  // every message names the VDB file itself
+}
+
+// OpenVDB allocates and fills every string at the size the file declares before reading it: a
+// damaged 10 kB file (tests/fuzz/corpus/vdb/regression_string_size.vdb, fuzz_vdb) cost 2 GB
+// and 3 s before failing. The layout walk refuses it first, naming the field and the offset;
+// a valid file passes it (and every prefix of one is refused: the test above).
+TEST(FuzzFindings, VdbDeclaringMoreThanItHoldsIsRefusedBeforeAllocating) {
+    const std::string bad =
+        std::string(FREQLAB_SOURCE_DIR) + "/tests/fuzz/corpus/vdb/regression_string_size.vdb";
+    const Error e = expect_error([&] { read_vdb_density(bad, "density", "s.json", "media[0]"); });
+    EXPECT_EQ(e.field(), "media[0].file");
+    EXPECT_NE(e.message().find("declares 1853189987 bytes but the file has"), std::string::npos)
+        << e.what();
+    EXPECT_NE(check_vdb_layout(bad).find("instance parent name declares"), std::string::npos)
+        << check_vdb_layout(bad);
+
+    VdbDensity g;
+    g.box_min = vec3(0.0f);
+    g.box_max = vec3(1.0f);
+    g.resolution = ivec3(4, 4, 4);
+    g.voxels.assign(64, 0.25f);
+    const fs::path valid = temp_file("valid.vdb");
+    write_vdb_density(valid.string(), "smoke", g);
+    EXPECT_EQ(check_vdb_layout(valid.string()), "");
+}
+
+// OpenEXR sizes its line buffers from the data window when the file is opened: an inverted or
+// vast window (fuzz_env_exr: corpus/env_exr/regression_inverted_window.exr) cost seconds of
+// allocation before any check of ours ran. The header walk now refuses it, naming the field.
+TEST(FuzzFindings, ExrDataWindowIsCheckedBeforeOpenExrSizesBuffers) {
+    const fs::path p = temp_file("window.exr");
+    LayerSet layers(4, 2);
+    layers.add("color", LayerKind::Color, 3);
+    write_exr(p, layers);
+    const std::string valid = read_bytes(p);
+    const size_t at = valid.find("dataWindow");
+    ASSERT_NE(at, std::string::npos);
+    const size_t value_at = at + std::strlen("dataWindow") + 1 + std::strlen("box2i") + 1 + 4;
+    auto with_window = [&](int32_t x0, int32_t y0, int32_t x1, int32_t y1) {
+        std::string bytes = valid;
+        const int32_t v[4] = {x0, y0, x1, y1};
+        std::memcpy(&bytes[value_at], v, 16);
+        write_bytes(p, bytes);
+    };
+    with_window(0, 0, -5, 1);
+    Error e = expect_error([&] { read_rgb_image(p); });
+    EXPECT_EQ(e.field(), "header.dataWindow");
+    EXPECT_NE(e.message().find("(0, 0) to (-5, 1)"), std::string::npos) << e.what();
+    with_window(-2000000000, 0, 2000000000, 1);
+    e = expect_error([&] { read_rgb_image(p); });
+    EXPECT_EQ(e.field(), "resolution");
+    with_window(0, 0, 3, 1);  // the file's own window reads
+    EXPECT_EQ(read_rgb_image(p).width, 4);
 }

@@ -28,8 +28,24 @@ void Progress::advance(long units) {
     units_done_.fetch_add(units, std::memory_order_relaxed);
 }
 
+namespace {
+std::atomic<bool> process_cancel{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler stores it");
+}  // namespace
+
+void request_process_cancel() {
+    process_cancel.store(true, std::memory_order_relaxed);
+}
+bool process_cancel_requested() {
+    return process_cancel.load(std::memory_order_relaxed);
+}
+void process_checkpoint() {
+    if (process_cancel_requested()) throw Cancelled();
+}
+
 void Progress::checkpoint() const {
     if (cancel_.load(std::memory_order_relaxed)) throw Cancelled();
+    process_checkpoint();
 }
 
 ProgressSnapshot Progress::snapshot() const {

@@ -23,6 +23,14 @@ struct ProgressSnapshot {
     std::string error;  // non-empty when the body threw
 };
 
+// Process-wide cancellation: the CLI's SIGINT / SIGTERM handler raises it (async-signal-safe:
+// one lock-free atomic store), and every checkpoint (Progress::checkpoint, or
+// process_checkpoint() where a body runs without a Progress) then throws Cancelled. Outputs are
+// written atomically (base/file_io.h), so a cancelled command leaves complete files only.
+void request_process_cancel();
+bool process_cancel_requested();
+void process_checkpoint();  // throws Cancelled once request_process_cancel() was called
+
 class Progress {
   public:
     Progress();
@@ -33,7 +41,7 @@ class Progress {
     void advance(long units = 1);
     void checkpoint() const;  // throws Cancelled when cancel() was requested
     void cancel() { cancel_.store(true); }
-    bool cancel_requested() const { return cancel_.load(); }
+    bool cancel_requested() const { return cancel_.load() || process_cancel_requested(); }
     ProgressSnapshot snapshot() const;
     void finish(const std::string& error, bool cancelled);
 

@@ -38,6 +38,7 @@ class AttributeWalker {
                     fail("header." + name, "declares " + std::to_string(size) + " bytes of " +
                                                type + ", the file has " +
                                                std::to_string(size_ - pos_) + " left");
+                if (name == "dataWindow" && type == "box2i" && size == 16) check_window();
                 pos_ += size_t(size);
                 in_.seekg(std::streamoff(pos_));
             }
@@ -47,6 +48,22 @@ class AttributeWalker {
     }
 
   private:
+    // OpenEXR sizes its line buffers from the data window before any pixel is read (fuzz_env_exr:
+    // an inverted window cost seconds of allocation), so the window is checked here first.
+    void check_window() {
+        unsigned char le[16];
+        if (!in_.read(reinterpret_cast<char*>(le), 16)) fail("header.dataWindow", "truncated");
+        int64_t v[4];
+        for (int i = 0; i < 4; ++i)
+            v[i] = int32_t(uint32_t(le[4 * i]) | uint32_t(le[4 * i + 1]) << 8 |
+                           uint32_t(le[4 * i + 2]) << 16 | uint32_t(le[4 * i + 3]) << 24);
+        const int64_t width = v[2] - v[0] + 1, height = v[3] - v[1] + 1;
+        if (width <= 0 || height <= 0)
+            fail("header.dataWindow", "is empty or inverted: (" + std::to_string(v[0]) + ", " +
+                                          std::to_string(v[1]) + ") to (" + std::to_string(v[2]) +
+                                          ", " + std::to_string(v[3]) + ")");
+        check_image_size(file_, width, height, 1);
+    }
     int next() {
         if (pos_ >= size_) return -1;
         const int c = in_.get();

@@ -169,6 +169,11 @@ ExrFile read_exr(const fs::path& path) {
     return file;
 }
 
+ImageHeader read_image_header(const fs::path& path) {
+    const ImageSpec spec = open_image(path, "")->spec();
+    return ImageHeader{spec.width, spec.height, spec.nchannels};
+}
+
 RgbImage read_rgb_image(const fs::path& path, bool require_finite) {
     auto in = open_image(path, "");
     const ImageSpec spec = in->spec();

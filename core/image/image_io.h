@@ -32,6 +32,13 @@ struct ExrFile {
 // written by freqlab get their kinds and legends back exactly.
 ExrFile read_exr(const std::filesystem::path& path);
 
+// An image file's size as its header declares it, read with the same checks as the readers
+// below (throws Error naming the file): what a caller may look at before reading the pixels.
+struct ImageHeader {
+    int width = 0, height = 0, channels = 0;
+};
+ImageHeader read_image_header(const std::filesystem::path& path);
+
 // Reads an RGB(A) image of any format OpenImageIO knows as linear RGB (8-bit sRGB files are
 // linearised). With `require_finite`, a NaN/Inf pixel is an error naming the pixel.
 RgbImage read_rgb_image(const std::filesystem::path& path, bool require_finite = true);

@@ -90,6 +90,7 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
         for (const std::string& group : render_method_info(config_.method).setting_groups)
             settings[group] = all.at(group);
         settings["reference"].erase("use_cache");
+        settings["reference"].erase("cache_megabytes");
         // Absent when off, so that references cached before the setting existed still match.
         if (!settings["reference"].value("stratified", false))
             settings["reference"].erase("stratified");
@@ -148,9 +149,12 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
     check_declared_layers(method, result.layers);
 
     const long nonfinite = count_nonfinite(result.layers) + guarded;
+    long cache_removed = 0;
     if (!cache_key.empty())
-        cache_.store(cache_key, result.layers,
-                     {{"scene", scene_.source}, {"frame", frame}, {"method", "reference"}});
+        cache_removed =
+            cache_.store(cache_key, result.layers,
+                         {{"scene", scene_.source}, {"frame", frame}, {"method", "reference"}},
+                         double(config_.reference.cache_megabytes) * 1e6);
     result.stats = {
         {"frame", frame},
         {"time_s", result.time_s},
@@ -162,6 +166,7 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
         {"pixels_shaded", long(result.layers.pixel_count())},
         {"nonfinite", nonfinite},
     };
+    if (!cache_key.empty()) result.stats["reference_cache_removed"] = cache_removed;
     for (const auto& [key, value] : method_stats.items()) result.stats[key] = value;
     return result;
 }

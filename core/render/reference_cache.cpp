@@ -1,7 +1,9 @@
 #include "render/reference_cache.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <vector>
 
 #include "base/error.h"
 #include "base/file_io.h"
@@ -33,21 +35,64 @@ std::optional<LayerSet> ReferenceCache::load(const std::string& key) const {
     std::error_code ec;
     if (!fs::is_regular_file(p, ec)) return std::nullopt;
     try {
-        return read_exr(p).layers;
+        LayerSet layers = read_exr(p).layers;
+        fs::last_write_time(p, fs::file_time_type::clock::now(), ec);
+        return layers;
     } catch (const Error&) {
         return std::nullopt;  // a damaged cache entry is re-rendered, not fatal
     }
 }
 
-void ReferenceCache::store(const std::string& key, const LayerSet& layers,
-                           const nlohmann::json& provenance) const {
+namespace {
+
+struct CachedFile {
+    fs::path path;
+    fs::file_time_type time;
+    double bytes;
+};
+
+std::vector<CachedFile> cached_files(const fs::path& dir) {
+    std::vector<CachedFile> files;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+        if (e.path().extension() != ".exr" || !e.is_regular_file(ec)) continue;
+        files.push_back({e.path(), e.last_write_time(ec), double(e.file_size(ec))});
+    }
+    return files;
+}
+
+}  // namespace
+
+double ReferenceCache::bytes_on_disk() const {
+    double total = 0.0;
+    for (const CachedFile& f : cached_files(dir_)) total += f.bytes;
+    return total;
+}
+
+long ReferenceCache::store(const std::string& key, const LayerSet& layers,
+                           const nlohmann::json& provenance, double max_bytes) const {
     std::error_code ec;
     fs::create_directories(dir_, ec);
-    if (ec) return;  // caching is an optimisation; an unwritable cache only costs time
+    if (ec) return 0;  // caching is an optimisation; an unwritable cache only costs time
     try {
         write_exr(dir_ / (key + ".exr"), layers, provenance);
     } catch (const Error&) {
+        return 0;
     }
+    std::vector<CachedFile> files = cached_files(dir_);
+    std::sort(files.begin(), files.end(),
+              [](const CachedFile& a, const CachedFile& b) { return a.time < b.time; });
+    double total = 0.0;
+    for (const CachedFile& f : files) total += f.bytes;
+    long removed = 0;
+    for (const CachedFile& f : files) {
+        if (total <= max_bytes) break;
+        if (fs::remove(f.path, ec)) {
+            total -= f.bytes;
+            ++removed;
+        }
+    }
+    return removed;
 }
 
 }  // namespace freqlab

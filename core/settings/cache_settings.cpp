@@ -43,10 +43,11 @@ const SettingsSchema& CacheSettings::schema() {
                    kInvalidatesCache,
                    "Z-buffer test: relative depth difference between a reprojected point and "
                    "the surface seen at its pixel that still counts as visible.")
-            .field(&CacheSettings::max_megabytes, "max_megabytes", 1, 65536, "MB",
+            .field(&CacheSettings::max_megabytes, "max_megabytes", 0.1, 65536, "MB",
                    kInvalidatesCache,
-                   "Memory cap of all caches together; beyond it the oldest entries are "
-                   "evicted after each frame.")
+                   "Memory cap of all caches' live points together; beyond it the oldest are "
+                   "evicted after each frame (the slot storage, cache_bytes in the stats, may "
+                   "hold one frame's new points more: they are inserted before the eviction).")
             .build();
     return s;
 }

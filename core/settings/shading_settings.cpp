@@ -25,6 +25,11 @@ const SettingsSchema& ReferenceSettings::schema() {
             .field(&ReferenceSettings::use_cache, "use_cache", 0, 1, "", kInvalidatesNothing,
                    "Reuse a reference rendered before with the same scene text and settings "
                    "(cached under $FREQLAB_CACHE_DIR, default ~/.cache/freqlab).")
+            .field(&ReferenceSettings::cache_megabytes, "cache_megabytes", 0.01, 1 << 20, "MB",
+                   kInvalidatesNothing,
+                   "The reference cache's size on disk: after each store, the least recently "
+                   "used references are removed until the folder fits (a reference larger "
+                   "than the cap is not kept).")
             .field(&ReferenceSettings::stratified, "stratified", 0, 1, "", kInvalidatesShading,
                    "Owen-scrambled Sobol samples: the same unbiased estimate with far less "
                    "noise where the integrand is smooth. Off by default (the reference is plain "

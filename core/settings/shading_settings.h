@@ -14,6 +14,8 @@ struct MisSettings {
 struct ReferenceSettings {
     int spp = 1024;
     bool use_cache = true;
+    // The reference cache's cap on disk: beyond it the least recently used files are removed.
+    float cache_megabytes = 4096.0f;
     bool stratified = false;  // Owen-scrambled Sobol samples (benches that need a finer ruler)
     static const SettingsSchema& schema();
 };

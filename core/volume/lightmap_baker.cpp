@@ -1,5 +1,7 @@
 #include "volume/lightmap_baker.h"
 
+#include <sys/resource.h>
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -24,8 +26,21 @@ nlohmann::json BakeStats::to_json() const {
             {"texels_total", texels_total},
             {"texels_valid", texels_valid},
             {"texels_invalid", texels_invalid},
-            {"spp", samples}};
+            {"spp", samples},
+            {"storage_mb", storage_mb},
+            {"peak_rss_mb", peak_rss_mb}};
 }
+
+namespace {
+
+// The process's peak resident memory so far (getrusage; Linux reports kilobytes).
+double peak_rss_megabytes() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return double(usage.ru_maxrss) * 1024.0 / 1e6;
+}
+
+}  // namespace
 
 std::string lightmap_name(const Scene& scene, const ObjectLightmap& map) {
     const std::string& n = scene.objects[size_t(map.object)].name;
@@ -108,7 +123,7 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
     for (size_t mi = 0; mi < maps_.size(); ++mi) {
         const ObjectLightmap& map = maps_[mi];
         tbb::parallel_for(0, map.height, [&](int y) {
-            if (progress) progress->checkpoint();
+            progress ? progress->checkpoint() : process_checkpoint();
             BakeCounters counters;
             for (int x = 0; x < map.width; ++x) {
                 const size_t i = size_t(y) * map.width + x;
@@ -163,6 +178,16 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
     stats_.impulse_queries += queries;
     stats_.guarded += guarded;
     stats_.bake_ms += ms_since(t0);
+    // What the bake holds: the atlases' texels and per-texel sums, probes and the correction
+    // field's texels (the scene, Embree's BVH and the tables are the process's, in peak_rss_mb).
+    size_t bytes = probe_sums_.size() * sizeof(BakeEstimator::ProbeParts);
+    for (size_t m = 0; m < maps_.size(); ++m)
+        bytes += maps_[m].texels.size() * sizeof(LightmapTexel) +
+                 maps_[m].triangle_uv.size() * sizeof(vec2) +
+                 (sums_[m].size() + deferred_sums_[m].size()) * sizeof(IrradianceParts) +
+                 fixed_[m].size() * sizeof(BakeEstimator::FixedDirect);
+    stats_.storage_mb = double(bytes) / 1e6;
+    stats_.peak_rss_mb = peak_rss_megabytes();
 }
 
 void LightmapBaker::run(Progress* progress) {

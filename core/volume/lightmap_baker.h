@@ -31,6 +31,8 @@ struct BakeStats {
     long rays = 0, impulse_queries = 0, guarded = 0;
     long texels_valid = 0, texels_invalid = 0, texels_total = 0;
     int samples = 0;
+    double storage_mb = 0.0;   // the bake's own arrays (atlases, sums, probes)
+    double peak_rss_mb = 0.0;  // the process's peak resident memory at the last pass's end
     nlohmann::json to_json() const;
 };
 

@@ -13,6 +13,7 @@
 
 #include "base/error.h"
 #include "base/file_io.h"
+#include "volume/vdb_file_check.h"
 
 namespace freqlab {
 
@@ -30,6 +31,9 @@ VdbDensity read_vdb_density(const std::string& file, const std::string& grid_nam
     initialise_openvdb();
     if (!std::filesystem::exists(file))
         throw Error(scene_file, field + ".file", "VDB file '" + file + "' does not exist");
+    // Sizes the file declares beyond its own length are refused before OpenVDB allocates them.
+    if (const std::string problem = check_vdb_layout(file); !problem.empty())
+        throw Error(scene_file, field + ".file", "cannot read VDB file '" + file + "': " + problem);
     openvdb::GridBase::Ptr base;
     std::vector<std::string> names;
     try {
