@@ -3,7 +3,11 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <string>
+#include <utility>
 #include <vector>
+
+#include <openvdb/version.h>
 
 namespace freqlab {
 
@@ -51,12 +55,47 @@ struct Walk {
         if (count < 0 || uint64_t(count) * 12 > left())
             return fail(std::string("the ") + what + " declares " + std::to_string(count) +
                         " entries");
-        for (int32_t i = 0; i < count; ++i)
-            if (!sized("metadata name") || !sized("metadata type name") || !sized("metadata value"))
-                return false;
+        for (int32_t i = 0; i < count; ++i) {
+            if (!sized("metadata name")) return false;
+            const size_t type_at = at + 4;
+            if (!sized("metadata type name")) return false;
+            const std::string type(bytes.data() + type_at, at - type_at);
+            const size_t value_at = at;
+            if (!sized("metadata value")) return false;
+            // OpenVDB reads a value of a known fixed-size type at its own size, whatever the file
+            // declares: a size that differs would shift every field after it.
+            const size_t declared = at - value_at - 4, fixed = fixed_value_size(type);
+            if (fixed && declared != fixed)
+                return fail("a " + type + " metadata value declares " + std::to_string(declared) +
+                            " bytes; a " + type + " has " + std::to_string(fixed));
+        }
         return true;
     }
+    // OpenVDB's registered fixed-size metadata types (openvdb/Metadata.h, math/*); 0: other.
+    static size_t fixed_value_size(const std::string& type) {
+        static const std::pair<const char*, size_t> kSizes[] = {
+            {"bool", 1},   {"float", 4},  {"double", 8}, {"int32", 4},
+            {"int64", 8},  {"vec2i", 8},  {"vec2s", 8},  {"vec2d", 16},
+            {"vec3i", 12}, {"vec3s", 12}, {"vec3d", 24}, {"vec4i", 16},
+            {"vec4s", 16}, {"vec4d", 32}, {"mat4s", 64}, {"mat4d", 128}};
+        for (const auto& [name, size] : kSizes)
+            if (type == name) return size;
+        return 0;
+    }
 };
+
+size_t linear_map_bytes(const std::string& type) {
+    static const std::pair<const char*, size_t> kMaps[] = {{"AffineMap", 128},
+                                                           {"UnitaryMap", 128},
+                                                           {"ScaleMap", 5 * 24},
+                                                           {"UniformScaleMap", 5 * 24},
+                                                           {"TranslationMap", 24},
+                                                           {"ScaleTranslateMap", 6 * 24},
+                                                           {"UniformScaleTranslateMap", 6 * 24}};
+    for (const auto& [name, bytes] : kMaps)
+        if (type == name) return bytes;
+    return 0;
+}
 
 }  // namespace
 
@@ -72,8 +111,14 @@ std::string check_vdb_layout(const std::string& path) {
     if (!w.read(magic, "header")) return w.problem;
     if (magic != kMagic) return "not an OpenVDB file (no VDB magic number)";
     if (!w.read(version, "header")) return w.problem;
-    // Older layouts are OpenVDB's alone to read (none of the fields below are checked).
-    if (version < kVersionSelectiveCompression) return "";
+    // Older layouts (before OpenVDB 2.0, 2013) are not walked, and OpenVDB reads them with
+    // the same unchecked sizes (fuzz_vdb: a version 103 header declared 1.7e9 metadata entries),
+    // so they are refused; so are versions newer than the OpenVDB freqlab links.
+    if (version < kVersionSelectiveCompression || version > uint32_t(openvdb::OPENVDB_FILE_VERSION))
+        return "file format version " + std::to_string(version) + " is outside the " +
+               std::to_string(kVersionSelectiveCompression) + " .. " +
+               std::to_string(openvdb::OPENVDB_FILE_VERSION) +
+               " this reader checks (re-save the file with a current OpenVDB)";
     uint32_t library[2];
     char has_offsets = 0;
     if (version >= kVersionLibraryVersion && !w.read(library, "header")) return w.problem;
@@ -94,7 +139,23 @@ std::string check_vdb_layout(const std::string& path) {
         if (!w.read(offsets, "grid descriptor")) return w.problem;
         uint32_t compression = 0;
         if (!w.read(compression, "grid compression")) return w.problem;
-        if (!w.metadata("grid metadata") || !w.sized("transform type name")) return w.problem;
+        if (!w.metadata("grid metadata")) return w.problem;
+        const size_t type_at = w.at + 4;
+        if (!w.sized("transform type name")) return w.problem;
+        // The linear maps' data (math/Maps.h: so many Vec3d / a Mat4d), then the tree's buffer
+        // count: OpenVDB warns on a count other than 1 and reads on into a corrupted heap
+        // (fuzz_vdb: "double free or corruption"). Other maps end the walk.
+        const size_t map_bytes =
+            linear_map_bytes(std::string(w.bytes.data() + type_at, w.at - type_at));
+        if (map_bytes) {
+            if (w.left() < map_bytes + 4) return "the file ends inside grid " + std::to_string(g);
+            w.at += map_bytes;
+            int32_t buffers = 0;
+            w.read(buffers, "tree");
+            if (buffers != 1)
+                return "grid " + std::to_string(g) + "'s tree declares " + std::to_string(buffers) +
+                       " buffers; OpenVDB reads trees of 1";
+        }
         // The grid's body cannot be walked field by field; its end offset skips it. Without
         // usable offsets (a stream), the grids after the first are OpenVDB's to check.
         const int64_t end = offsets[2];
