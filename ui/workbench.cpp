@@ -130,8 +130,9 @@ void apply_render_invalidation(Workbench::State& s, uint32_t flags) {
 void draw_settings_panel(Workbench::State& s) {
     ImGui::Text("scene: %s", s.scene.name.c_str());
     // What the loader changed in the input (dropped triangles, negative texels read as 0).
-    for (const std::string& note : s.scene.load_notes)
-        ImGui::TextColored(ImVec4(1.0f, 0.8f, 0.3f, 1.0f), "note: %s", note.c_str());
+    ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.8f, 0.3f, 1.0f));
+    for (const std::string& note : s.scene.load_notes) ImGui::TextWrapped("note: %s", note.c_str());
+    ImGui::PopStyleColor();
     if (s.bake) {
         draw_bake_panel(s);
         draw_compare_panel(s);  // against a VPT bake (workbench_bake.cpp)
