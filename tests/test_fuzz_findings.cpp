@@ -18,6 +18,9 @@
 #include "session/session_file.h"
 #include "volume/impulse_tables.h"
 #include "volume/vdb_file_check.h"
+
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
 #include "volume/vdb_reader.h"
 
 using namespace freqlab;
@@ -255,4 +258,52 @@ TEST(FuzzFindings, ExrDataWindowIsCheckedBeforeOpenExrSizesBuffers) {
     EXPECT_EQ(e.field(), "resolution");
     with_window(0, 0, 3, 1);  // the file's own window reads
     EXPECT_EQ(read_rgb_image(p).width, 4);
+}
+
+// OpenVDB 10's bloscFromStream reads a value chunk marked uncompressed at the length the file
+// declares into a buffer sized for its node, then compares (an ASan-confirmed heap-buffer
+// overflow; fuzz_vdb: "double free or corruption" later). The walk follows the tree's topology
+// and buffers and refuses such a chunk before OpenVDB reads it.
+TEST(FuzzFindings, VdbValueChunkLargerThanItsNodeIsRefused) {
+    const std::string bad = std::string(FREQLAB_SOURCE_DIR) +
+                            "/tests/fuzz/corpus/vdb/regression_uncompressed_chunk.vdb";
+    EXPECT_NE(check_vdb_layout(bad).find(
+                  "an uncompressed value chunk declares 4294967296 bytes where its node holds 24"),
+              std::string::npos)
+        << check_vdb_layout(bad);
+    const Error e = expect_error([&] { read_vdb_density(bad, "density", "s.json", "media[0]"); });
+    EXPECT_EQ(e.field(), "media[0].file");
+}
+
+// The walk's model of the format against what OpenVDB writes: every compression (none, zip,
+// blosc, with and without the active mask), half floats, tiles, several grids and a vec3s
+// grid beside the density. The walk ends each grid's topology exactly at its block offset and
+// its buffers exactly at its end offset, or refuses the file.
+TEST(FuzzFindings, VdbLayoutWalkAcceptsWhatOpenVdbWrites) {
+    openvdb::initialize();
+    int files = 0;
+    for (uint32_t compression : {0u, 1u, 2u, 3u, 4u, 6u})
+        for (bool half : {false, true}) {
+            auto density = openvdb::FloatGrid::create(0.0f);
+            density->setName("density");
+            density->setSaveFloatAsHalf(half);
+            auto acc = density->getAccessor();
+            for (int z = 0; z < 20; ++z)
+                for (int y = 0; y < 12; ++y)
+                    for (int x = 0; x < 9; ++x) acc.setValue(openvdb::Coord(x, y, z), 0.1f * x);
+            density->fill(openvdb::CoordBBox(openvdb::Coord(64), openvdb::Coord(255)), 2.0f);
+            acc.setValueOff(openvdb::Coord(3, 3, 3), 0.5f);  // an inactive non-background value
+            auto velocity = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+            velocity->setName("velocity");
+            velocity->getAccessor().setValue(openvdb::Coord(1, 2, 3), openvdb::Vec3s(1, 2, 3));
+            const fs::path p = temp_file("variant.vdb");
+            openvdb::io::File out(p.string());
+            out.setCompression(compression);
+            out.write({velocity, density});
+            out.close();
+            EXPECT_EQ(check_vdb_layout(p.string()), "")
+                << "compression " << compression << " half " << half;
+            ++files;
+        }
+    EXPECT_EQ(files, 12);
 }
