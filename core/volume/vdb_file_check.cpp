@@ -68,6 +68,16 @@ struct Walk {
             if (fixed && declared != fixed)
                 return fail("a " + type + " metadata value declares " + std::to_string(declared) +
                             " bytes; a " + type + " has " + std::to_string(fixed));
+            // io::DelayedLoadMetadata sizes its per-leaf arrays from a count inside its value
+            // (fuzz_vdb: seconds of allocation); a leaf takes at least its 64-byte mask.
+            if (type == "__delayedload" && declared >= 4) {
+                uint32_t leaves = 0;
+                std::memcpy(&leaves, bytes.data() + value_at + 4, 4);
+                if (uint64_t(leaves) * 64 > bytes.size())
+                    return fail("the delayed-load metadata declares " + std::to_string(leaves) +
+                                " leaves; a file of " + std::to_string(bytes.size()) +
+                                " bytes holds at most " + std::to_string(bytes.size() / 64));
+            }
         }
         return true;
     }
