@@ -78,7 +78,8 @@ std::string check_complete(const fs::path& path) {
         } else if (ext == ".png") {
             read_rgb_image(path, false);
         } else if (ext == ".json") {
-            (void)nlohmann::json::parse(read_text_file(path));
+            if (nlohmann::json::parse(read_text_file(path)).is_discarded())
+                return "JSON that does not parse";
         } else if (ext == ".csv") {
             const std::string text = read_text_file(path);
             if (text.empty() || text.back() != '\n') return "a CSV file not ending in a newline";
