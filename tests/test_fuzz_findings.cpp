@@ -292,6 +292,11 @@ TEST(FuzzFindings, VdbLayoutWalkAcceptsWhatOpenVdbWrites) {
                 for (int y = 0; y < 12; ++y)
                     for (int x = 0; x < 9; ++x) acc.setValue(openvdb::Coord(x, y, z), 0.1f * x);
             density->fill(openvdb::CoordBBox(openvdb::Coord(64), openvdb::Coord(255)), 2.0f);
+            // 600 leaves apart: the delayed-load metadata's per-leaf arrays get long enough for
+            // OpenVDB to compress them.
+            for (int i = 0; i < 600; ++i)
+                acc.setValue(openvdb::Coord(300 + (i % 20) * 8, (i / 20 % 10) * 8, (i / 200) * 8),
+                             0.01f * float(i % 7));
             acc.setValueOff(openvdb::Coord(3, 3, 3), 0.5f);  // an inactive non-background value
             auto velocity = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
             velocity->setName("velocity");

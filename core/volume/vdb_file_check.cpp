@@ -68,17 +68,38 @@ struct Walk {
             if (fixed && declared != fixed)
                 return fail("a " + type + " metadata value declares " + std::to_string(declared) +
                             " bytes; a " + type + " has " + std::to_string(fixed));
-            // io::DelayedLoadMetadata sizes its per-leaf arrays from a count inside its value
-            // (fuzz_vdb: seconds of allocation); a leaf takes at least its 64-byte mask.
-            if (type == "__delayedload" && declared >= 4) {
-                uint32_t leaves = 0;
-                std::memcpy(&leaves, bytes.data() + value_at + 4, 4);
-                if (uint64_t(leaves) * 64 > bytes.size())
-                    return fail("the delayed-load metadata declares " + std::to_string(leaves) +
-                                " leaves; a file of " + std::to_string(bytes.size()) +
-                                " bytes holds at most " + std::to_string(bytes.size() / 64));
-            }
+            if (type == "__delayedload" && !delayed_load(value_at + 4, declared)) return false;
         }
+        return true;
+    }
+    // io::DelayedLoadMetadata::readValue reads its own parts, whatever the declared size: a
+    // leaf count (OpenVDB sizes its arrays from it; fuzz_vdb: 7e8 in a 10 kB file), then the
+    // leaves' masks (1 byte each) and compressed sizes (8 bytes each), each as a uint32 size
+    // and that many blosc bytes, or 0 and the raw bytes (as OpenVDB 10 writes them: checked on
+    // files of 1 and 600 leaves, every compression). They must fill the declared size
+    // exactly, or every field after them shifts (fuzz_vdb: a multi-GB string).
+    bool delayed_load(size_t value, size_t declared) {
+        if (declared == 0) return true;  // read as nothing
+        if (declared < 12)
+            return fail("the delayed-load metadata is " + std::to_string(declared) +
+                        " bytes, shorter than its 12-byte header");
+        uint32_t leaves = 0, masks = 0, sizes = 0;
+        std::memcpy(&leaves, bytes.data() + value, 4);
+        if (uint64_t(leaves) * 64 > bytes.size())
+            return fail("the delayed-load metadata declares " + std::to_string(leaves) +
+                        " leaves; a file of " + std::to_string(bytes.size()) +
+                        " bytes holds at most " + std::to_string(bytes.size() / 64));
+        std::memcpy(&masks, bytes.data() + value + 4, 4);
+        const uint64_t mask_bytes = masks ? masks : uint64_t(leaves);
+        if (mask_bytes + 12 > declared)
+            return fail("the delayed-load metadata's masks overrun its value");
+        std::memcpy(&sizes, bytes.data() + value + 8 + mask_bytes, 4);
+        // 0xffffffff: no sizes stored (a file without blosc / zip compression).
+        const uint64_t size_bytes = sizes == 0xffffffffu ? 0 : sizes ? sizes : uint64_t(leaves) * 8;
+        if (mask_bytes + size_bytes + 12 != declared)
+            return fail("the delayed-load metadata's parts take " +
+                        std::to_string(mask_bytes + size_bytes + 12) + " bytes; it declares " +
+                        std::to_string(declared));
         return true;
     }
     // OpenVDB's registered fixed-size metadata types (openvdb/Metadata.h, math/*); 0: other.
