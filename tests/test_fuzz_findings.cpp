@@ -304,7 +304,10 @@ TEST(FuzzFindings, VdbLayoutWalkAcceptsWhatOpenVdbWrites) {
             const fs::path p = temp_file("variant.vdb");
             openvdb::io::File out(p.string());
             out.setCompression(compression);
-            out.write({velocity, density});
+            openvdb::MetaMap file_metadata;  // file-level metadata too
+            file_metadata.insertMeta("creator", openvdb::StringMetadata("freqlab test"));
+            file_metadata.insertMeta("frame", openvdb::Int32Metadata(7));
+            out.write({velocity, density}, file_metadata);
             out.close();
             EXPECT_EQ(check_vdb_layout(p.string()), "")
                 << "compression " << compression << " half " << half;

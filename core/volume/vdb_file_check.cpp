@@ -56,7 +56,10 @@ struct Walk {
             return fail(std::string("the ") + what + " declares " + std::to_string(count) +
                         " entries");
         for (int32_t i = 0; i < count; ++i) {
+            const size_t name_at = at;
             if (!sized("metadata name")) return false;
+            // OpenVDB throws on an empty name mid-map, and its Stream reads on from there.
+            if (at - name_at == 4) return fail("a metadata entry has an empty name");
             const size_t type_at = at + 4;
             if (!sized("metadata type name")) return false;
             const std::string type(bytes.data() + type_at, at - type_at);
