@@ -1,6 +1,7 @@
 // Bad input: each case must throw freqlab::Error whose message names the file and the field.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
@@ -243,4 +244,29 @@ TEST(BadInput, UnreadableExr) {
         EXPECT_EQ(e.file(), p.string());
         EXPECT_NE(std::string(e.what()).find("cannot read image"), std::string::npos) << e.what();
     }
+}
+
+// A full disk (issue "Reliability": "could not write EXR:" with no reason): the error names the
+// file and says why, and no temporary file is left. Needs a 48 kB tmpfs (root); skipped without.
+TEST(BadInput, FullDiskNamesTheFileAndTheReason) {
+    const fs::path dir = fs::temp_directory_path() / "freqlab_full_disk";
+    fs::create_directories(dir);
+    if (std::system(("mount -t tmpfs -o size=48k tmpfs " + dir.string() + " 2>/dev/null").c_str()))
+        GTEST_SKIP() << "cannot mount a small tmpfs here (not root?)";
+    LayerSet layers(160, 90);
+    Layer& color = layers.add("color", LayerKind::Color, 3);
+    uint32_t state = 12345;  // noise: 170 kB of floats that zip cannot shrink below 48 kB
+    for (float& v : color.data) v = float(state = state * 1664525u + 1013904223u) * 2.3e-10f;
+    std::string what;
+    try {
+        write_exr(dir / "frame.exr", layers);
+    } catch (const Error& e) {
+        what = e.what();
+        EXPECT_EQ(e.file(), (dir / "frame.exr").string());
+    }
+    size_t left = 0;
+    for (const auto& entry : fs::directory_iterator(dir)) left += entry.is_regular_file();
+    EXPECT_EQ(std::system(("umount " + dir.string()).c_str()), 0);
+    EXPECT_NE(what.find("no space left on the device"), std::string::npos) << what;
+    EXPECT_EQ(left, 0u);  // neither the file nor its temporary sibling
 }

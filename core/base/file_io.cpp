@@ -1,7 +1,9 @@
 #include "base/file_io.h"
 
 #include <unistd.h>
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -31,8 +33,21 @@ void write_text_atomically(const fs::path& path, const std::string& text) {
         std::ofstream out(tmp, std::ios::binary);
         out << text;
         out.close();
-        if (!out) throw Error(path.string(), "", "could not write file");
+        if (!out)
+            throw Error(path.string(), "",
+                        "could not write file: " + describe_write_failure(path, ""));
     });
+}
+
+std::string describe_write_failure(const fs::path& path, std::string reason) {
+    if (reason.empty()) reason = errno ? std::string(std::strerror(errno)) : "no reason given";
+    std::error_code ec;
+    const fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+    const fs::space_info space = fs::space(dir, ec);
+    if (!ec && space.available < (uintmax_t(1) << 20))
+        return "no space left on the device (" + std::to_string(space.available) +
+               " bytes available in " + dir.string() + "): " + reason;
+    return reason;
 }
 
 std::string read_text_file(const fs::path& path) {

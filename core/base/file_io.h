@@ -13,6 +13,9 @@ void write_atomically(const std::filesystem::path& path,
                       const std::function<void(const std::filesystem::path&)>& write);
 void write_text_atomically(const std::filesystem::path& path, const std::string& text);
 std::string read_text_file(const std::filesystem::path& path);  // throws Error naming the file
+// A failed write's reason for an Error: `reason` (else errno's text), prefixed by "no space left
+// on the device (N bytes available in DIR)" when the file's folder has under 1 MB free.
+std::string describe_write_failure(const std::filesystem::path& path, std::string reason);
 
 // freqlab's cache folder: $FREQLAB_CACHE_DIR, else $XDG_CACHE_HOME/freqlab, else
 // ~/.cache/freqlab, else a temporary folder.

@@ -62,6 +62,14 @@ std::unique_ptr<float[]> pixel_buffer(const ImageSpec& spec) {
     return std::unique_ptr<float[]>(new float[size_t(spec.width) * spec.height * spec.nchannels]);
 }
 
+// Why a write failed: the writer's own error (OIIO keeps it per ImageOutput), else the global
+// one, with what the file system says (a full disk gave "could not write EXR:" and no reason).
+std::string write_failure(const fs::path& path, ImageOutput* out) {
+    std::string why = out ? out->geterror() : std::string();
+    if (why.empty()) why = OIIO::geterror();
+    return describe_write_failure(path, why);
+}
+
 }  // namespace
 
 void write_exr(const fs::path& path, const LayerSet& layers, const json& provenance) {
@@ -91,7 +99,8 @@ void write_exr(const fs::path& path, const LayerSet& layers, const json& provena
         auto out = ImageOutput::create(tmp.string());
         if (!out || !out->open(tmp.string(), spec) ||
             !out->write_image(TypeDesc::FLOAT, interleaved.data()) || !out->close())
-            throw Error(path.string(), "", "could not write EXR: " + OIIO::geterror());
+            throw Error(path.string(), "",
+                        "could not write EXR: " + write_failure(path, out.get()));
     });
 }
 
@@ -211,7 +220,8 @@ void write_png(const fs::path& path, int width, int height,
         auto out = ImageOutput::create(tmp.string());
         if (!out || !out->open(tmp.string(), spec) ||
             !out->write_image(TypeDesc::UINT8, rgb8.data()) || !out->close())
-            throw Error(path.string(), "", "could not write PNG: " + OIIO::geterror());
+            throw Error(path.string(), "",
+                        "could not write PNG: " + write_failure(path, out.get()));
     });
 }
 
