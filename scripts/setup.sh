@@ -8,7 +8,7 @@ packages=(
   build-essential cmake pkg-config
   libembree-dev libopenexr-dev libimath-dev libopenimageio-dev libglm-dev libglfw3-dev libosmesa6-dev
   libimgui-dev libfftw3-dev libtbb-dev nlohmann-json3-dev libassimp-dev libgtest-dev
-  libbenchmark-dev libboost-math-dev libopenvdb-dev libcli11-dev python3-glad xvfb xauth
+  libbenchmark-dev libboost-math-dev libopenvdb-dev libblosc-dev libcli11-dev python3-glad xvfb xauth
   blender-data assimp-testmodels fonts-dejavu-core clang-format clang libclang-rt-14-dev
 )
 missing=()
