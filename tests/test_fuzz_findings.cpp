@@ -315,3 +315,14 @@ TEST(FuzzFindings, VdbLayoutWalkAcceptsWhatOpenVdbWrites) {
         }
     EXPECT_EQ(files, 12);
 }
+
+// c-blosc decodes a damaged chunk's internal block offsets unchecked (fuzz_vdb: a SEGV inside
+// libblosc); the walk asks blosc_cbuffer_validate first.
+TEST(FuzzFindings, DamagedBloscChunkIsRefusedBeforeDecoding) {
+    const std::string bad =
+        std::string(FREQLAB_SOURCE_DIR) + "/tests/fuzz/corpus/vdb/regression_blosc_damaged.vdb";
+    EXPECT_NE(check_vdb_layout(bad).find("a blosc value chunk is damaged"), std::string::npos)
+        << check_vdb_layout(bad);
+    const Error e = expect_error([&] { read_vdb_density(bad, "density", "s.json", "media[0]"); });
+    EXPECT_EQ(e.field(), "media[0].file");
+}
