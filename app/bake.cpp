@@ -10,6 +10,7 @@
 #include "base/error.h"
 #include "base/file_io.h"
 #include "base/stopwatch.h"
+#include "cluster.h"
 #include "commands.h"
 #include "image/colormap.h"
 #include "image/image_io.h"
@@ -144,9 +145,19 @@ int run_bake(const BakeArgs& args) {
     if (!args.reference.empty() && !fs::is_directory(args.reference))
         throw Error(args.reference, "--reference", "expected a directory written by freqlab bake");
 
+    // Under mpirun every rank bakes its share of the texel rows (lightmap_baker.h) and rank 0
+    // gathers them and writes everything: the same bytes as one process.
+    Cluster& cluster = Cluster::world();
+    if (cluster.distributed()) {
+        if (args.compare_surface)
+            throw Error("--compare-surface", "", "measures one process's overhead: run it alone");
+        if (!args.debug_texel.empty())
+            throw Error("--debug-texel", args.debug_texel, "traces one process: run it alone");
+    }
+
     // Everything that can be wrong with the input is checked before any output exists.
     const Scene scene = load_scene(args.scene);
-    print_load_notes(scene);
+    if (cluster.rank() == 0) print_load_notes(scene);
     const Media media(scene.media, scene.source);
     std::unique_ptr<tbb::global_control> limit;
     if (args.threads > 0)
@@ -159,21 +170,47 @@ int run_bake(const BakeArgs& args) {
     // No media: no tables are loaded or built (the impulse bake is then the surface bake).
     std::unique_ptr<ImpulseTables> tables;
     double tables_ms = 0.0;
-    if (method == BakeMethod::Impulse && !media.empty()) {
+    const bool needs_tables = method == BakeMethod::Impulse && !media.empty();
+    // Ranks sharing a cache folder: rank 0 tabulates (or loads) first, the others then load
+    // its file instead of each tabulating the same tables.
+    if (needs_tables && cluster.rank() != 0) cluster.barrier();
+    if (needs_tables) {
         const auto t0 = Clock::now();
         tables = std::make_unique<ImpulseTables>(ImpulseTables::cached(kDefaultTableBounces));
         tables_ms = ms_since(t0);
     }
-    std::error_code ec;
-    fs::create_directories(args.out, ec);
-    if (ec || !fs::is_directory(args.out))
-        throw Error(args.out, "--out", "cannot create the output directory: " + ec.message());
+    if (needs_tables && cluster.rank() == 0) cluster.barrier();
+    if (cluster.rank() == 0) {
+        std::error_code ec;
+        fs::create_directories(args.out, ec);
+        if (ec || !fs::is_directory(args.out))
+            throw Error(args.out, "--out", "cannot create the output directory: " + ec.message());
+    }
 
     LightmapBaker baker(rays, media, tables.get(), method, settings);
+    if (cluster.distributed()) {
+        baker.set_share(cluster.rank(), cluster.size());
+        cluster.set_work("texel rows and probes = " + std::to_string(cluster.rank()) + " mod " +
+                         std::to_string(cluster.size()));
+    }
     Progress progress;
     {
-        TerminalProgressBar bar(progress, !args.quiet && stderr_is_terminal());
+        TerminalProgressBar bar(progress,
+                                cluster.rank() == 0 && !args.quiet && stderr_is_terminal());
         baker.run(&progress);
+    }
+    json ranks = json::array();
+    if (cluster.distributed()) {
+        constexpr int kShareTag = 21;
+        const double own_ms = baker.stats().bake_ms;
+        const std::vector<std::string> shares = cluster.gather(baker.encode_share(), kShareTag);
+        const std::vector<std::string> times =
+            cluster.gather(std::to_string(own_ms), kShareTag + 1);
+        if (cluster.rank() != 0) return 0;
+        for (int r = 1; r < cluster.size(); ++r)
+            baker.add_share(shares[size_t(r)], r, "bake share of rank " + std::to_string(r));
+        for (int r = 0; r < cluster.size(); ++r)
+            ranks.push_back({{"rank", r}, {"bake_ms", std::stod(times[size_t(r)])}});
     }
     BakeStats stats = baker.stats();
     stats.tables_ms = tables_ms;
@@ -185,6 +222,7 @@ int run_bake(const BakeArgs& args) {
                    {"settings", group.to_json()},
                    {"load_notes", scene.load_notes},
                    {"stats", stats.to_json()}};
+    if (!ranks.empty()) report["ranks"] = ranks;
     if (args.compare_surface && method != BakeMethod::Surface) {
         LightmapBaker surface(rays, media, nullptr, BakeMethod::Surface, settings);
         surface.run(nullptr);

@@ -29,6 +29,7 @@
 
 #include "base/error.h"
 #include "base/file_io.h"
+#include "cluster.h"
 #include "commands.h"
 #include "render/frame_renderer.h"
 #include "scene/scene_loader.h"
@@ -52,6 +53,15 @@ double percentile(std::vector<double> v, double q) {
 }  // namespace
 
 int run_bench(const BenchArgs& a) {
+    // Only the bake-thickness study splits its configurations over processes; every other
+    // study measures times in one process, and N ranks would each run it whole.
+    if (a.study != "bake-thickness") {
+        if (Cluster::world().distributed())
+            throw Error("--study", a.study,
+                        "runs in one process (only bake-thickness splits over MPI ranks)");
+        if (!a.part.empty())
+            throw Error("--part", a.part, "only the bake-thickness study splits into parts");
+    }
     if (a.study == "cache" || a.study == "cache-ablation") return run_bench_cache(a);
     if (a.study == "bake") return run_bench_bake(a);
     if (a.study == "bake-thickness") return run_bench_bake_thickness(a);

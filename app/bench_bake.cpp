@@ -32,6 +32,7 @@
 #include "base/file_io.h"
 #include "base/stopwatch.h"
 #include "bench_common.h"
+#include "cluster.h"
 #include "commands.h"
 #include "image/line_plot.h"
 #include "scene/scene_loader.h"
@@ -316,20 +317,61 @@ int run_bench_bake(const BenchArgs& a) {
     return 0;
 }
 
-int run_bench_bake_thickness(const BenchArgs& a) {
-    BakeStudy study(a, "bake-thickness");
-    const BakeSettings& settings = study.settings;
-    const SettingsGroup& group = study.group;
+namespace {
+
+constexpr double kThicknessFactors[] = {0.25, 0.5, 1.0, 2.0, 4.0, 8.0};
+constexpr int kThicknessRowTag = 31;
+
+// One configuration of the sweep: every medium's density x `factor`, a VPT reference and
+// impulse / extinction bakes there. The row carries everything the CSV and the plot show.
+json thickness_row(const BenchArgs& a, BakeStudy& study, const ImpulseTables& tables,
+                   const std::vector<MediumDesc>& original, int index) {
+    const double factor = kThicknessFactors[index];
     Media& media = study.media;
     const RayScene& rays = study.rays;
-    const ImpulseTables tables = ImpulseTables::cached(kDefaultTableBounces);
-    fs::create_directories(a.out);
-    std::vector<MediumDesc> original;
-    for (size_t i = 0; i < media.size(); ++i) original.push_back(media.desc(i));
-    BakeSettings ref_settings = settings;
-    ref_settings.seed = settings.seed + 7919;
+    for (size_t i = 0; i < media.size(); ++i) {
+        const MediumDesc& d = original[i];
+        media.set_coefficients(i, d.sigma_s, d.sigma_a, d.g, d.density_scale * factor);
+    }
+    BakeSettings ref_settings = study.settings;
+    ref_settings.seed = study.settings.seed + 7919;
+    const double tau = thickness_across(media, rays);
+    LightmapBaker reference(rays, media, nullptr, BakeMethod::Vpt, ref_settings);
+    reference.run_pass(a.reference_spp);
+    LightmapBaker impulse(rays, media, &tables, BakeMethod::Impulse, study.settings);
+    impulse.run_pass(a.max_spp);
+    LightmapBaker extinction(rays, media, nullptr, BakeMethod::Extinction, study.settings);
+    extinction.run_pass(a.max_spp);
+    const double e_impulse = relmse_against(impulse, reference);
+    const double e_extinction = relmse_against(extinction, reference);
+    const double m_ref = layer_sum(reference, "lm_inscatter_multiple");
+    const double m_ratio = m_ref > 0.0 ? layer_sum(impulse, "lm_inscatter_multiple") / m_ref : NAN;
+    const RegionComparison sh_i = shadowed_against(impulse, reference, rays);
+    const RegionComparison sh_e = shadowed_against(extinction, reference, rays);
+    std::fprintf(stderr,
+                 "  density x %-5g tau across %7.3f: relMSE impulse %.4f extinction %.4f, "
+                 "multiple impulse / vpt %.3f; shadowed (%ld texels) relMSE impulse %.4f "
+                 "extinction %.4f, in-scattering impulse / vpt %.3f\n",
+                 factor, tau, e_impulse, e_extinction, m_ratio, sh_i.texels, sh_i.irradiance_relmse,
+                 sh_e.irradiance_relmse, sh_i.inscatter_ratio);
+    return {{"density_factor", factor},
+            {"tau_across", tau},
+            {"impulse_relmse", e_impulse},
+            {"extinction_relmse", e_extinction},
+            {"multiple_impulse_over_vpt", m_ratio},
+            {"shadowed", {{"impulse", region_json(sh_i)}, {"extinction", region_json(sh_e)}}},
+            {"reference_ms", reference.stats().bake_ms},
+            {"impulse_ms", impulse.stats().bake_ms}};
+}
 
-    json rows = json::array();
+// A NaN went through JSON as null (the ratio when VPT has no multiple scattering).
+double row_number(const json& v) {
+    return v.is_number() ? v.get<double>() : NAN;
+}
+
+}  // namespace
+
+void write_bake_thickness_outputs(const std::string& out, const json& header, const json& rows) {
     std::string csv =
         "density_factor,tau_across,impulse_relmse,extinction_relmse,"
         "multiple_impulse_over_vpt,shadowed_texels,shadowed_impulse_relmse,"
@@ -337,68 +379,75 @@ int run_bench_bake_thickness(const BenchArgs& a) {
         "impulse_ms\n";
     PlotSeries s_impulse{"impulse", {1.0f, 0.6f, 0.2f}, {}, {}};
     PlotSeries s_extinction{"extinction", {0.5f, 0.5f, 0.5f}, {}, {}};
-    for (double factor : {0.25, 0.5, 1.0, 2.0, 4.0, 8.0}) {
-        for (size_t i = 0; i < media.size(); ++i) {
-            const MediumDesc& d = original[i];
-            media.set_coefficients(i, d.sigma_s, d.sigma_a, d.g, d.density_scale * factor);
-        }
-        const double tau = thickness_across(media, rays);
-        LightmapBaker reference(rays, media, nullptr, BakeMethod::Vpt, ref_settings);
-        reference.run_pass(a.reference_spp);
-        LightmapBaker impulse(rays, media, &tables, BakeMethod::Impulse, settings);
-        impulse.run_pass(a.max_spp);
-        LightmapBaker extinction(rays, media, nullptr, BakeMethod::Extinction, settings);
-        extinction.run_pass(a.max_spp);
-        const double e_impulse = relmse_against(impulse, reference);
-        const double e_extinction = relmse_against(extinction, reference);
-        const double m_ref = layer_sum(reference, "lm_inscatter_multiple");
-        const double m_ratio =
-            m_ref > 0.0 ? layer_sum(impulse, "lm_inscatter_multiple") / m_ref : NAN;
-        const RegionComparison sh_i = shadowed_against(impulse, reference, rays);
-        const RegionComparison sh_e = shadowed_against(extinction, reference, rays);
-        std::fprintf(stderr,
-                     "  density x %-5g tau across %7.3f: relMSE impulse %.4f extinction %.4f, "
-                     "multiple impulse / vpt %.3f; shadowed (%ld texels) relMSE impulse %.4f "
-                     "extinction %.4f, in-scattering impulse / vpt %.3f\n",
-                     factor, tau, e_impulse, e_extinction, m_ratio, sh_i.texels,
-                     sh_i.irradiance_relmse, sh_e.irradiance_relmse, sh_i.inscatter_ratio);
-        rows.push_back(
-            {{"density_factor", factor},
-             {"tau_across", tau},
-             {"impulse_relmse", e_impulse},
-             {"extinction_relmse", e_extinction},
-             {"multiple_impulse_over_vpt", m_ratio},
-             {"shadowed", {{"impulse", region_json(sh_i)}, {"extinction", region_json(sh_e)}}},
-             {"reference_ms", reference.stats().bake_ms},
-             {"impulse_ms", impulse.stats().bake_ms}});
-        csv += std::to_string(factor) + "," + std::to_string(tau) + "," +
+    for (const json& r : rows) {
+        const double tau = r["tau_across"], e_impulse = r["impulse_relmse"],
+                     e_extinction = r["extinction_relmse"];
+        const json& sh_i = r["shadowed"]["impulse"];
+        const json& sh_e = r["shadowed"]["extinction"];
+        csv += std::to_string(r["density_factor"].get<double>()) + "," + std::to_string(tau) + "," +
                std::to_string(e_impulse) + "," + std::to_string(e_extinction) + "," +
-               std::to_string(m_ratio) + "," + std::to_string(sh_i.texels) + "," +
-               std::to_string(sh_i.irradiance_relmse) + "," +
-               std::to_string(sh_e.irradiance_relmse) + "," + std::to_string(sh_i.inscatter_ratio) +
-               "," + std::to_string(reference.stats().bake_ms) + "," +
-               std::to_string(impulse.stats().bake_ms) + "\n";
+               std::to_string(row_number(r["multiple_impulse_over_vpt"])) + "," +
+               std::to_string(sh_i["texels"].get<long>()) + "," +
+               std::to_string(row_number(sh_i["lm_irradiance_relmse"])) + "," +
+               std::to_string(row_number(sh_e["lm_irradiance_relmse"])) + "," +
+               std::to_string(row_number(sh_i["inscatter_ratio"])) + "," +
+               std::to_string(r["reference_ms"].get<double>()) + "," +
+               std::to_string(r["impulse_ms"].get<double>()) + "\n";
         if (tau > 0.0 && e_impulse > 0.0 && e_extinction > 0.0) {
-            s_impulse.x.push_back(tau), s_impulse.y.push_back(e_impulse);
-            s_extinction.x.push_back(tau), s_extinction.y.push_back(e_extinction);
+            s_impulse.x.push_back(float(tau)), s_impulse.y.push_back(float(e_impulse));
+            s_extinction.x.push_back(float(tau)), s_extinction.y.push_back(float(e_extinction));
         }
     }
-    const json report = {{"scene", a.scene},
-                         {"settings", group.to_json()},
-                         {"reference", {{"method", "vpt"}, {"spp", a.reference_spp}}},
-                         {"spp", a.max_spp},
-                         {"sweep", rows}};
-    write_text_atomically(fs::path(a.out) / "bench_bake_thickness.json", report.dump(2) + "\n");
-    write_text_atomically(fs::path(a.out) / "bench_bake_thickness.csv", csv);
+    json report = header;
+    report["sweep"] = rows;
+    write_text_atomically(fs::path(out) / "bench_bake_thickness.json", report.dump(2) + "\n");
+    write_text_atomically(fs::path(out) / "bench_bake_thickness.csv", csv);
     if (s_impulse.x.size() >= 2) {
         LinePlot plot;
-        plot.title = "bake " + fs::path(a.scene).stem().string() + ": relMSE vs optical thickness";
+        plot.title = "bake " + fs::path(header["scene"].get<std::string>()).stem().string() +
+                     ": relMSE vs optical thickness";
         plot.x_label = "optical thickness across the scene (log)";
         plot.y_label = "relMSE (log)";
         plot.log_x = plot.log_y = true;
         plot.series = {s_impulse, s_extinction};
-        write_line_plot(fs::path(a.out) / "bench_bake_thickness.png", plot);
+        write_line_plot(fs::path(out) / "bench_bake_thickness.png", plot);
     }
+}
+
+int run_bench_bake_thickness(const BenchArgs& a) {
+    // The configurations split like frames (app/cluster.h): MPI ranks send their rows to rank 0;
+    // a Slurm array task (--part I/N) writes its rows for `freqlab merge`.
+    Cluster& cluster = Cluster::world();
+    const WorkPart part = bench_work_part(a);
+    BakeStudy study(a, "bake-thickness");
+    const ImpulseTables tables = ImpulseTables::cached(kDefaultTableBounces);
+    if (cluster.rank() == 0) fs::create_directories(a.out);
+    std::vector<MediumDesc> original;
+    for (size_t i = 0; i < study.media.size(); ++i) original.push_back(study.media.desc(i));
+    const std::vector<int> mine = round_robin_items(0, int(std::size(kThicknessFactors)), part);
+    cluster.set_work("density factors " + describe_items(mine));
+    json rows = json::array();
+    for (int index : mine) rows.push_back(thickness_row(a, study, tables, original, index));
+    const json header = {{"scene", a.scene},
+                         {"settings", study.group.to_json()},
+                         {"reference", {{"method", "vpt"}, {"spp", a.reference_spp}}},
+                         {"spp", a.max_spp}};
+    if (cluster.distributed()) {
+        const std::vector<std::string> all = cluster.gather(rows.dump(), kThicknessRowTag);
+        if (cluster.rank() != 0) return 0;
+        rows = json::array();
+        for (const std::string& r : all)
+            for (const json& row : json::parse(r)) rows.push_back(row);
+    } else if (!part.whole()) {
+        write_bench_part(a, part, header, rows);
+        return 0;
+    }
+    std::sort(rows.begin(), rows.end(), [](const json& x, const json& y) {
+        return x["density_factor"].get<double>() < y["density_factor"].get<double>();
+    });
+    write_bake_thickness_outputs(a.out, header, rows);
+    json report = header;
+    report["sweep"] = rows;
     std::printf("%s\n", report.dump(2).c_str());
     return 0;
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "base/error.h"
+#include "base/file_io.h"
 
 namespace freqlab {
 
@@ -50,6 +51,23 @@ double median(std::vector<double> v) {
     std::sort(v.begin(), v.end());
     const size_t m = v.size() / 2;
     return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+WorkPart bench_work_part(const BenchArgs& args) {
+    const Cluster& cluster = Cluster::world();
+    if (args.part.empty()) return cluster.part();
+    if (cluster.distributed())
+        throw Error("--part", args.part, "not under mpirun: the ranks split the work there");
+    return parse_work_part(args.part, "--part");
+}
+
+void write_bench_part(const BenchArgs& args, WorkPart part, const nlohmann::json& header,
+                      const nlohmann::json& rows) {
+    const nlohmann::json file = {{"study", args.study},
+                                 {"part", {{"index", part.index}, {"count", part.count}}},
+                                 {"header", header},
+                                 {"rows", rows}};
+    write_text_atomically(std::filesystem::path(args.out) / "bench_part.json", file.dump(2) + "\n");
 }
 
 }  // namespace freqlab

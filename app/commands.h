@@ -23,8 +23,16 @@ struct RenderArgs {
     std::string debug_pixel;  // "X,Y"
     bool quiet = false;
     std::string out;
+    // Past one process (app/cluster.h): "I/N" renders part I of N (a Slurm array task; merged
+    // by `freqlab merge`); method cache: each part warms its cache over `warm_frames` frames
+    // before the first frame it keeps.
+    std::string part;
+    int warm_frames = 10;
 };
-int run_render(const RenderArgs& args);
+int run_render(const RenderArgs& args);  // render.cpp
+
+// `freqlab merge OUT DIR...`: the parts of a split render into one run (merge.cpp).
+int run_merge(const std::string& out, const std::vector<std::string>& parts);
 
 struct CompareArgs {
     std::string test, ref;
@@ -48,6 +56,7 @@ struct BenchArgs {
     int overhead_spp = 64;     // bake study: equal-sample overhead and re-bake
     bool full = false;         // stability study: every declared extreme (takes longer)
     bool quiet = false;        // stability study: no line per case
+    std::string part;          // bake-thickness: "I/N", this Slurm array task's configurations
 };
 int run_bench(const BenchArgs& args);
 

@@ -9,6 +9,7 @@
 
 #include "base/error.h"
 #include "base/job.h"
+#include "cluster.h"
 #include "commands.h"
 #include "render/method.h"
 #include "volume/bake_estimators.h"
@@ -60,6 +61,12 @@ extern "C" void cancel_on_signal(int signal_number) {
 }
 
 int main(int argc, char** argv) {
+    // Under mpirun every rank parses the same command line; MPI ends with main (MpiSession).
+    struct MpiSession {
+        MpiSession(int* argc, char*** argv) { freqlab::Cluster::world().start(argc, argv); }
+        ~MpiSession() { freqlab::Cluster::world().finish(); }
+    } mpi_session(&argc, &argv);
+    const freqlab::Cluster& cluster = freqlab::Cluster::world();
     CLI::App app{"freqlab — a workbench for frequency-space light-transport caching"};
     app.require_subcommand(0, 1);
 
@@ -106,6 +113,20 @@ int main(int argc, char** argv) {
     render->add_option("--debug-pixel", r.debug_pixel, "X,Y: print this pixel's trace");
     render->add_flag("--quiet", r.quiet, "no progress bar");
     render->add_option("--out", r.out, "output directory")->required();
+    render->add_option("--part", r.part,
+                       "I/N: render part I of N (a Slurm array task; `freqlab merge` joins the "
+                       "parts); under mpirun the ranks split the frames themselves");
+    render->add_option("--warm-frames", r.warm_frames,
+                       "method cache split into parts or ranks: frames each part renders to warm "
+                       "its cache before the first frame it keeps (default 10)");
+
+    std::string merge_out;
+    std::vector<std::string> merge_parts;
+    auto* merge = app.add_subcommand(
+        "merge",
+        "join the parts of a split run (render / bench --study bake-thickness --part I/N)");
+    merge->add_option("out", merge_out, "output directory of the whole run")->required();
+    merge->add_option("parts", merge_parts, "the parts' output directories")->required();
 
     freqlab::CompareArgs c;
     auto* compare = app.add_subcommand("compare", "error metrics of TEST against REF as JSON");
@@ -194,15 +215,25 @@ int main(int argc, char** argv) {
                     "stability study: every declared extreme, incl. the largest sample counts");
     bench->add_flag("--quiet", ba.quiet, "stability study: no line per case");
     bench->add_option("--out", ba.out, "output directory (bench_points.json)");
+    bench->add_option("--part", ba.part,
+                      "bake-thickness: I/N, compute part I of N of the configurations (a Slurm "
+                      "array task; `freqlab merge` joins the parts)");
 
     CLI11_PARSE(app, argc, argv);
-    const bool command_line = *render || *compare || *figure || *tables || *bake || *bench;
+    if (cluster.distributed() && !*render && !*bake && !*bench) {
+        if (cluster.rank() == 0)
+            std::fprintf(stderr, "error: only render, bake and bench split over MPI ranks\n");
+        return 1;
+    }
+    const bool command_line =
+        *render || *compare || *figure || *tables || *bake || *bench || *merge;
     if (command_line) {
         std::signal(SIGINT, cancel_on_signal);
         std::signal(SIGTERM, cancel_on_signal);
     }
     try {
         if (*render) return freqlab::run_render(r);
+        if (*merge) return freqlab::run_merge(merge_out, merge_parts);
         if (*compare) return freqlab::run_compare(c);
         if (*figure) return freqlab::run_figure(fa);
         if (*tables) {
@@ -245,14 +276,18 @@ int main(int argc, char** argv) {
         return headless_fallback(gui_scene, gui_frame);
 #endif
     } catch (const freqlab::Error& e) {
+        // One rank's error ends every rank (none waits for it), naming the rank and its work.
+        if (cluster.distributed()) cluster.abort(1, std::string("error: ") + e.what());
         std::fprintf(stderr, "error: %s\n", e.what());
         return 1;
     } catch (const freqlab::Cancelled&) {
+        if (cluster.distributed()) cluster.abort(130, "cancelled");
         std::fprintf(stderr,
                      "\ncancelled: the files written before are complete; nothing "
                      "half-written was left\n");
         return 130;
     } catch (const std::exception& e) {
+        if (cluster.distributed()) cluster.abort(1, std::string("error: ") + e.what());
         std::fprintf(stderr, "error: %s\n", e.what());
         return 1;
     }

@@ -10,6 +10,7 @@ packages=(
   libimgui-dev libfftw3-dev libtbb-dev nlohmann-json3-dev libassimp-dev libgtest-dev
   libbenchmark-dev libboost-math-dev libopenvdb-dev libblosc-dev libcli11-dev python3-glad xvfb xauth
   blender-data assimp-testmodels fonts-dejavu-core clang-format clang libclang-rt-14-dev
+  libopenmpi-dev openmpi-bin
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -240,6 +240,10 @@ ImpulseTables ImpulseTables::cached(int bounces, std::string* path_used) {
     ImpulseTables t = build(bounces);
     try {
         t.save(path);
+        // What the file holds, not what was built: the file stores floats (the area tables
+        // halves), so a bake on freshly built double tables differed from every later bake
+        // (found splitting a bake over MPI ranks, some of which load the file rank 0 wrote).
+        return load(path);
     } catch (const std::exception&) {
     }
     return t;

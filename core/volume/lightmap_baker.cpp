@@ -9,6 +9,7 @@
 
 #include "base/error.h"
 #include "base/stopwatch.h"
+#include "image/layer_codec.h"
 #include "volume/texel_filter.h"
 
 namespace freqlab {
@@ -90,6 +91,8 @@ void LightmapBaker::reset() {
     sums_.assign(maps_.size(), {});
     for (size_t i = 0; i < maps_.size(); ++i) sums_[i].assign(maps_[i].texels.size(), {});
     deferred_sums_ = sums_;
+    share_shadows_.assign(maps_.size(), {});
+    for (size_t i = 0; i < maps_.size(); ++i) share_shadows_[i].assign(maps_[i].texels.size(), 0);
     fixed_.assign(maps_.size(), {});  // media may have changed: computed afresh
     for (size_t i = 0; i < maps_.size(); ++i) fixed_[i].assign(maps_[i].texels.size(), {});
     probe_sums_.assign(probe_positions_.size(), {});
@@ -120,10 +123,15 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
     if (progress) progress->begin_stage("bake " + std::string(to_string(method_)), rows);
     std::atomic<long> rays{0}, queries{0}, guarded{0};
     const int first = samples_;
+    long map_row0 = 0;  // global number of this map's row 0 (the shares' split)
     for (size_t mi = 0; mi < maps_.size(); ++mi) {
         const ObjectLightmap& map = maps_[mi];
         tbb::parallel_for(0, map.height, [&](int y) {
             progress ? progress->checkpoint() : process_checkpoint();
+            if (!in_share(map_row0 + y, share_index_)) {
+                if (progress) progress->advance();
+                return;
+            }
             BakeCounters counters;
             for (int x = 0; x < map.width; ++x) {
                 const size_t i = size_t(y) * map.width + x;
@@ -143,9 +151,11 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
             guarded += counters.guarded;
             if (progress) progress->advance();
         });
+        map_row0 += map.height;
     }
     // Probes: keyed after the lightmaps (index maps_.size()).
     tbb::parallel_for(size_t(0), probe_positions_.size(), [&](size_t i) {
+        if (!in_share(long(i), share_index_)) return;
         BakeCounters counters;
         for (int s = first; s < first + samples; ++s) {
             CounterRng rng = texel_random(settings_.seed, maps_.size(), i, s);
@@ -188,6 +198,67 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
                  fixed_[m].size() * sizeof(BakeEstimator::FixedDirect);
     stats_.storage_mb = double(bytes) / 1e6;
     stats_.peak_rss_mb = peak_rss_megabytes();
+}
+
+void LightmapBaker::set_share(int index, int count) {
+    if (count < 1 || index < 0 || index >= count)
+        throw Error("bake", "share", "expected 0 <= index < count");
+    share_index_ = index;
+    share_count_ = count;
+}
+
+namespace {
+constexpr uint32_t kShareMagic = 0x464c4253;  // "FLBS"
+}
+
+std::string LightmapBaker::encode_share() const {
+    ByteWriter w;
+    w.put(kShareMagic);
+    w.put<int32_t>(share_index_);
+    w.put<int32_t>(samples_);
+    w.put<int64_t>(stats_.rays);
+    w.put<int64_t>(stats_.impulse_queries);
+    w.put<int64_t>(stats_.guarded);
+    long row = 0;
+    for (size_t mi = 0; mi < maps_.size(); ++mi)
+        for (int y = 0; y < maps_[mi].height; ++y, ++row)
+            if (in_share(row, share_index_)) {
+                const size_t at = size_t(y) * maps_[mi].width, n = size_t(maps_[mi].width);
+                w.put_bytes(&sums_[mi][at], n * sizeof(IrradianceParts));
+                w.put_bytes(&deferred_sums_[mi][at], n * sizeof(IrradianceParts));
+                TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
+                for (size_t x = 0; x < n; ++x)
+                    set_texel_filter_guide(guide, x, fixed_[mi][at + x], sums_[mi][at + x]);
+                w.put_bytes(guide.shadows.data(), n * sizeof(uint64_t));
+            }
+    for (size_t i = 0; i < probe_sums_.size(); ++i)
+        if (in_share(long(i), share_index_))
+            w.put_bytes(&probe_sums_[i], sizeof(BakeEstimator::ProbeParts));
+    return std::move(w.bytes());
+}
+
+void LightmapBaker::add_share(const std::string& bytes, int index, const std::string& source) {
+    ByteReader r(bytes, source);
+    if (r.get<uint32_t>() != kShareMagic || r.get<int32_t>() != index)
+        throw Error(source, "share", "expected bake share " + std::to_string(index));
+    if (r.get<int32_t>() != samples_)
+        throw Error(source, "share", "baked a different number of samples");
+    stats_.rays += long(r.get<int64_t>());
+    stats_.impulse_queries += long(r.get<int64_t>());
+    stats_.guarded += long(r.get<int64_t>());
+    long row = 0;
+    for (size_t mi = 0; mi < maps_.size(); ++mi)
+        for (int y = 0; y < maps_[mi].height; ++y, ++row)
+            if (in_share(row, index)) {
+                const size_t at = size_t(y) * maps_[mi].width, n = size_t(maps_[mi].width);
+                r.get_bytes(&sums_[mi][at], n * sizeof(IrradianceParts));
+                r.get_bytes(&deferred_sums_[mi][at], n * sizeof(IrradianceParts));
+                r.get_bytes(&share_shadows_[mi][at], n * sizeof(uint64_t));
+            }
+    for (size_t i = 0; i < probe_sums_.size(); ++i)
+        if (in_share(long(i), index))
+            r.get_bytes(&probe_sums_[i], sizeof(BakeEstimator::ProbeParts));
+    if (r.remaining() != 0) throw Error(source, "share", "bytes past the end");
 }
 
 void LightmapBaker::run(Progress* progress) {
@@ -280,7 +351,10 @@ LayerSet LightmapBaker::layers(size_t mi) const {
     // Outgoing radiance of each part, and irradiance; dilated together.
     std::vector<float> values(n * 15, 0.0f);
     TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
-    for (size_t i = 0; i < n; ++i) set_texel_filter_guide(guide, i, fixed_[mi][i], sums_[mi][i]);
+    for (size_t i = 0; i < n; ++i) {
+        set_texel_filter_guide(guide, i, fixed_[mi][i], sums_[mi][i]);
+        guide.shadows[i] |= share_shadows_[mi][i];
+    }
     const std::vector<IrradianceParts> deferred =
         filter_texel_sums(map, deferred_sums_[mi], guide, texel_filter_radius(estimator_));
     for (size_t i = 0; i < n; ++i) {

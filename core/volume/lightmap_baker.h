@@ -49,6 +49,16 @@ class LightmapBaker {
     // Forget the sums (after a media change); the atlas stays.
     void reset();
 
+    // A bake split across processes (app/cluster.h): share `index` of `count` computes the texel
+    // rows r (numbered over the lightmaps in order) and probes i with r, i = index (mod count);
+    // their sums are what one process computes there, bit for bit. encode_share() is this
+    // process's rows and probes as bytes (with its counters); add_share() stores another
+    // share's into this baker, after which layers() and probes() are the whole bake's. The
+    // vertex correction field is built whole by every share (deeper vertices read any texel).
+    void set_share(int index, int count);
+    std::string encode_share() const;
+    void add_share(const std::string& bytes, int index, const std::string& source);
+
     int samples() const { return samples_; }
     // Light probes: positions and their mean order-3 SH of incident radiance per part.
     struct Probe {
@@ -86,6 +96,12 @@ class LightmapBaker {
     std::vector<BakeEstimator::ProbeParts> probe_sums_;
     int samples_ = 0;
     BakeStats stats_;
+    int share_index_ = 0, share_count_ = 1;
+    // Other shares' texels: which lights' connections are occluded (the filter's guide, which
+    // a share's own texels read from fixed_).
+    std::vector<std::vector<uint64_t>> share_shadows_;
+    // Whether global texel row `row` / probe `probe` belongs to share `index`.
+    bool in_share(long row, int index) const { return row % share_count_ == index; }
 };
 
 // The random numbers of sample `sample` of texel `texel` of lightmap `lightmap` (probes: lightmap

@@ -1,0 +1,91 @@
+#include "image/layer_codec.h"
+
+#include <cstring>
+
+#include "base/error.h"
+
+namespace freqlab {
+
+namespace {
+constexpr uint32_t kMagic = 0x464c4c53;  // "FLLS"
+}
+
+void ByteReader::get_bytes(void* out, size_t n) {
+    if (n > remaining())
+        throw Error(source_, "layers",
+                    "truncated message: " + std::to_string(n) + " bytes wanted at offset " +
+                        std::to_string(at_) + ", " + std::to_string(remaining()) + " left");
+    std::memcpy(out, bytes_.data() + at_, n);
+    at_ += n;
+}
+
+std::string ByteReader::get_string() {
+    const uint64_t n = get<uint64_t>();
+    if (n > remaining())
+        throw Error(source_, "layers",
+                    "a string of " + std::to_string(n) + " bytes with " +
+                        std::to_string(remaining()) + " left");
+    std::string s(bytes_.data() + at_, size_t(n));
+    at_ += size_t(n);
+    return s;
+}
+
+std::string encode_layers(const LayerSet& layers) {
+    ByteWriter w;
+    w.put(kMagic);
+    w.put<int32_t>(layers.width());
+    w.put<int32_t>(layers.height());
+    w.put<uint32_t>(uint32_t(layers.layers().size()));
+    for (const Layer& l : layers.layers()) {
+        w.put_string(l.name);
+        w.put<int32_t>(int32_t(l.kind));
+        w.put<int32_t>(l.channels);
+        w.put_string(l.description);
+        w.put<uint32_t>(uint32_t(l.legend.size()));
+        for (const std::string& s : l.legend) w.put_string(s);
+        w.put<uint32_t>(uint32_t(l.palette.size()));
+        w.put_bytes(l.palette.data(), l.palette.size() * sizeof(vec3));
+        w.put<uint8_t>(l.sparse ? 1 : 0);
+        w.put<uint64_t>(l.data.size());
+        w.put_bytes(l.data.data(), l.data.size() * sizeof(float));
+    }
+    return std::move(w.bytes());
+}
+
+LayerSet decode_layers(const std::string& bytes, const std::string& source) {
+    ByteReader r(bytes, source);
+    if (r.get<uint32_t>() != kMagic) throw Error(source, "layers", "not an encoded LayerSet");
+    const int width = r.get<int32_t>(), height = r.get<int32_t>();
+    if (width < 0 || height < 0) throw Error(source, "layers", "negative size");
+    LayerSet set(width, height);
+    const uint32_t count = r.get<uint32_t>();
+    for (uint32_t i = 0; i < count; ++i) {
+        const std::string name = r.get_string();
+        const int kind = r.get<int32_t>();
+        if (kind < 0 || kind > int(LayerKind::Categorical))
+            throw Error(source, "layers." + name, "unknown kind " + std::to_string(kind));
+        const int channels = r.get<int32_t>();
+        if (channels < 1 || channels > 4)
+            throw Error(source, "layers." + name, "expected 1 to 4 channels");
+        Layer& l = set.add(name, LayerKind(kind), channels, r.get_string());
+        l.legend.resize(r.get<uint32_t>());
+        for (std::string& s : l.legend) s = r.get_string();
+        const uint32_t colours = r.get<uint32_t>();
+        if (size_t(colours) * sizeof(vec3) > r.remaining())
+            throw Error(source, "layers." + name, "palette past the end");
+        l.palette.resize(colours);
+        r.get_bytes(l.palette.data(), l.palette.size() * sizeof(vec3));
+        l.sparse = r.get<uint8_t>() != 0;
+        const uint64_t values = r.get<uint64_t>();
+        if (values != uint64_t(set.pixel_count()) * uint64_t(channels))
+            throw Error(source, "layers." + name,
+                        "expected " + std::to_string(set.pixel_count() * size_t(channels)) +
+                            " values, got " + std::to_string(values));
+        r.get_bytes(l.data.data(), size_t(values) * sizeof(float));
+    }
+    if (r.remaining() != 0)
+        throw Error(source, "layers", std::to_string(r.remaining()) + " bytes past the end");
+    return set;
+}
+
+}  // namespace freqlab
