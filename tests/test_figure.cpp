@@ -7,6 +7,7 @@
 #include "image/image_io.h"
 #include "image/line_plot.h"
 
+#include <array>
 #include <filesystem>
 
 using namespace freqlab;
@@ -56,6 +57,47 @@ TEST(Figure, MainImageAndInsetsAreExactCopies) {
     EXPECT_EQ(int(frame_px[0]), int(std::lround(c.r * 255)));
     const unsigned char* on_main = fig_px(fig.main.x0 + 40 * 3 - 1, fig.main.y0 + 25 * 3);
     EXPECT_EQ(int(on_main[1]), int(std::lround(c.g * 255)));
+}
+
+// A categorical layer with its own palette (method A's decision colours, say), written to EXR
+// and read back as `freqlab figure` reads it: each class's legend swatch has the colour of that
+// class's pixels. (Before: the EXR dropped the palette and the legend drew the default one.)
+TEST(Figure, CategoricalLegendSwatchesHaveTheColoursOfTheirPixels) {
+    const int w = 12, h = 6;
+    LayerSet set(w, h);
+    Layer& d = set.add("decision", LayerKind::Categorical, 1, "a decision per pixel");
+    d.legend = {"none", "reused", "temporal", "spatial"};
+    d.palette = {vec3(0.0f), vec3(1.0f), vec3(1.0f, 0.6f, 0.0f), vec3(0.2f, 0.45f, 1.0f)};
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) d.at(w, x, y) = float(x / 3);  // columns of 3: classes 0..3
+    const std::filesystem::path file =
+        std::filesystem::temp_directory_path() / "freqlab_test_figure_palette.exr";
+    write_exr(file, set, {{"test", "palette"}});
+    const ExrFile read = read_exr(file);
+    std::filesystem::remove(file);
+    ASSERT_EQ(read.layers.get("decision").palette.size(), d.palette.size());
+    for (size_t i = 0; i < d.palette.size(); ++i)
+        EXPECT_EQ(read.layers.get("decision").palette[i], d.palette[i]) << "palette[" << i << "]";
+
+    // The workbench's export composes from its layers; `freqlab figure` from the EXR.
+    for (const LayerSet* layers : std::vector<const LayerSet*>{&set, &read.layers}) {
+        FigureSpec spec;
+        spec.layer = "decision";
+        spec.scale = 4;
+        const FigureImage fig = compose_figure(*layers, spec);
+        ASSERT_EQ(fig.legend_swatches.size(), d.legend.size()) << "every class has a swatch";
+        auto px = [&](int x, int y) {
+            const unsigned char* p = &fig.rgb[(size_t(y) * fig.width + x) * 3];
+            return std::array<int, 3>{p[0], p[1], p[2]};
+        };
+        for (int k = 0; k < 4; ++k) {
+            const FigureImage::Box& b = fig.legend_swatches[size_t(k)];
+            const auto swatch = px((b.x0 + b.x1) / 2, (b.y0 + b.y1) / 2);
+            const auto pixel = px(fig.main.x0 + (3 * k + 1) * spec.scale + 1, fig.main.y0 + 5);
+            EXPECT_EQ(swatch, pixel) << "class " << k << " (" << d.legend[size_t(k)] << ")"
+                                     << (layers == &set ? " in memory" : " read from EXR");
+        }
+    }
 }
 
 TEST(Figure, BadInsetsAndLayersAreErrors) {

@@ -81,7 +81,6 @@ FigureImage compose_figure(const LayerSet& set, const FigureSpec& spec) {
     const int main_w = lw * spec.scale, main_h = lh * spec.scale;
     const int title_h = spec.title.empty() ? 0 : kTextSize + 8;
     const bool has_bar = layer->kind != LayerKind::Color && layer->channels == 1;
-    const int bar_h = has_bar ? kBarHeight + kTextSize + 14 : 0;
     const int n = int(spec.insets.size());
     const int panel_h = n ? (main_h - (n - 1) * kMargin) / n : 0;
     // Inset panels keep their aspect ratio at the height each gets.
@@ -91,6 +90,24 @@ FigureImage compose_figure(const LayerSet& set, const FigureSpec& spec) {
 
     FigureImage fig;
     fig.width = kMargin + main_w + (n ? kMargin + panel_w : 0) + kMargin;
+    // A categorical legend: every entry, in rows as wide as the figure (a narrow image wraps
+    // its legend instead of dropping the classes past the edge).
+    struct LegendEntry {
+        int x, row;
+    };
+    std::vector<LegendEntry> legend;
+    if (has_bar && layer->kind == LayerKind::Categorical) {
+        int x = kMargin, row = 0;
+        for (const std::string& name : layer->legend) {
+            const int entry_w = 18 + 9 * int(name.size()) + 14;
+            if (x > kMargin && x + entry_w > fig.width - kMargin) x = kMargin, ++row;
+            legend.push_back({x, row});
+            x += entry_w;
+        }
+    }
+    const int legend_rows = legend.empty() ? 1 : legend.back().row + 1;
+    const int bar_h =
+        has_bar ? kBarHeight + kTextSize + 14 + (legend_rows - 1) * (kTextSize + 8) : 0;
     fig.height = kMargin + title_h + main_h + bar_h + kMargin;
     Canvas c{fig.width, fig.height,
              std::vector<unsigned char>(size_t(fig.width) * fig.height * 3, 24)};
@@ -113,11 +130,12 @@ FigureImage compose_figure(const LayerSet& set, const FigureSpec& spec) {
     if (has_bar) {
         const int by = my + main_h + 8, bw = std::min(main_w, 480);
         if (layer->kind == LayerKind::Categorical) {
-            int x = mx;
-            for (size_t i = 0; i < layer->legend.size() && x < fig.width - 40; ++i) {
-                c.fill(x, by, x + 14, by + 14, categorical(int(i)));
-                draw_text(c, x + 18, by + 13, layer->legend[i], spec.font);
-                x += 18 + 9 * int(layer->legend[i].size()) + 14;
+            for (size_t i = 0; i < legend.size(); ++i) {
+                const int x = legend[i].x, y = by + legend[i].row * (kTextSize + 8);
+                // The colours the pixels were drawn in: the layer's own palette.
+                c.fill(x, y, x + 14, y + 14, category_colour(*layer, int(i)));
+                fig.legend_swatches.push_back({x, y, x + 14, y + 14});
+                draw_text(c, x + 18, y + 13, layer->legend[i], spec.font);
             }
         } else {
             for (int x = 0; x < bw; ++x) {

@@ -35,6 +35,7 @@ struct FigureImage {
     };
     Box main;
     std::vector<Box> inset_panels;
+    std::vector<Box> legend_swatches;  // categorical layers: the swatch of value i
 };
 
 // Composes the figure; throws Error naming the field for a bad layer, inset or font.

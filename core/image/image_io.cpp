@@ -25,9 +25,38 @@ json layer_table(const LayerSet& set) {
         json e = {{"name", l.name}, {"kind", to_string(l.kind)}, {"channels", l.channels}};
         if (!l.description.empty()) e["description"] = l.description;
         if (!l.legend.empty()) e["legend"] = l.legend;
+        // A categorical layer's own colours travel with it, so that `freqlab figure` and the
+        // workbench colour a layer read back exactly as the one that was written.
+        if (!l.palette.empty()) {
+            json colours = json::array();
+            for (const vec3& c : l.palette) colours.push_back({c.x, c.y, c.z});
+            e["palette"] = colours;
+        }
         table.push_back(e);
     }
     return table;
+}
+
+// A layer's palette from its header entry: RGB triples in [0, 1].
+std::vector<vec3> read_palette(const json& colours, const fs::path& path,
+                               const std::string& field) {
+    if (!colours.is_array() || colours.size() > 4096)
+        throw Error(path.string(), field + ".palette", "expected an array of at most 4096 colours");
+    std::vector<vec3> palette;
+    for (size_t k = 0; k < colours.size(); ++k) {
+        const json& c = colours[k];
+        const std::string where = field + ".palette[" + std::to_string(k) + "]";
+        if (!c.is_array() || c.size() != 3) throw Error(path.string(), where, "expected [r, g, b]");
+        vec3 v;
+        for (int i = 0; i < 3; ++i) {
+            if (!c[size_t(i)].is_number() || !(c[size_t(i)].get<double>() >= 0.0) ||
+                !(c[size_t(i)].get<double>() <= 1.0))
+                throw Error(path.string(), where, "expected components in [0, 1]");
+            v[i] = c[size_t(i)].get<float>();
+        }
+        palette.push_back(v);
+    }
+    return palette;
 }
 
 float srgb_to_linear(float c) {
@@ -148,6 +177,7 @@ ExrFile read_exr(const fs::path& path) {
                                            layer_kind_from_string(e.value("kind", "continuous")),
                                            channels, e.value("description", ""));
                 if (e.contains("legend")) l.legend = e["legend"].get<std::vector<std::string>>();
+                if (e.contains("palette")) l.palette = read_palette(e["palette"], path, field);
                 copy_channels(l);
             } catch (const json::exception& x) {  // a field of another type
                 throw Error(path.string(), field,
