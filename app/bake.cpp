@@ -14,6 +14,7 @@
 #include "commands.h"
 #include "image/colormap.h"
 #include "image/image_io.h"
+#include "scene/provenance.h"
 #include "scene/scene_loader.h"
 #include "settings/settings_group.h"
 #include "volume/impulse_tables.h"
@@ -170,16 +171,13 @@ int run_bake(const BakeArgs& args) {
     // No media: no tables are loaded or built (the impulse bake is then the surface bake).
     std::unique_ptr<ImpulseTables> tables;
     double tables_ms = 0.0;
-    const bool needs_tables = method == BakeMethod::Impulse && !media.empty();
-    // Ranks sharing a cache folder: rank 0 tabulates (or loads) first, the others then load
-    // its file instead of each tabulating the same tables.
-    if (needs_tables && cluster.rank() != 0) cluster.barrier();
-    if (needs_tables) {
-        const auto t0 = Clock::now();
-        tables = std::make_unique<ImpulseTables>(ImpulseTables::cached(kDefaultTableBounces));
-        tables_ms = ms_since(t0);
+    if (method == BakeMethod::Impulse && !media.empty()) {
+        cluster.rank0_first([&] {
+            const auto t0 = Clock::now();
+            tables = std::make_unique<ImpulseTables>(ImpulseTables::cached(kDefaultTableBounces));
+            tables_ms = ms_since(t0);
+        });
     }
-    if (needs_tables && cluster.rank() == 0) cluster.barrier();
     if (cluster.rank() == 0) {
         std::error_code ec;
         fs::create_directories(args.out, ec);
@@ -231,19 +229,20 @@ int run_bake(const BakeArgs& args) {
     }
     json maps = json::array();
     const BakeKeyLight key = bake_key_light(rays);
+    const json bake_provenance =
+        output_provenance(scene, to_string(method), group.to_json(), long(settings.seed));
+    std::vector<LayerSet> baked;  // every lightmap's layers (the preview reads them too)
     for (size_t i = 0; i < baker.lightmaps().size(); ++i) {
         const ObjectLightmap& map = baker.lightmaps()[i];
         const std::string name = lightmap_name(scene, map);
-        const LayerSet layers = baker.layers(i);
-        const json provenance = {{"freqlab", "0.1"},
-                                 {"scene", args.scene},
-                                 {"method", to_string(method)},
-                                 {"lightmap", name},
-                                 {"settings", group.to_json()}};
+        baked.push_back(baker.layers(i));
+        const LayerSet& layers = baked.back();
+        json provenance = bake_provenance;
+        provenance["lightmap"] = name;
         write_exr(fs::path(args.out) / (name + ".exr"), layers, provenance);
         DisplayParams display;
         write_png(fs::path(args.out) / (name + ".png"), layers.width(), layers.height(),
-                  layer_to_rgb8(layers, layers.get("lm_total"), display));
+                  layer_to_rgb8(layers, layers.get("lm_total"), display), provenance);
         json entry = {{"name", name},
                       {"object", map.object},
                       {"width", map.width},
@@ -266,15 +265,12 @@ int run_bake(const BakeArgs& args) {
     {
         // The lightmapped scene from the scene's camera (volume/lightmap_preview.h).
         const auto [w, h] = parse_size(args.preview_size, "--preview-size");
-        std::vector<LayerSet> baked;
-        for (size_t i = 0; i < baker.lightmaps().size(); ++i) baked.push_back(baker.layers(i));
         const LayerSet preview =
             render_lightmap_preview(rays, scene.camera.at(0.0f), w, h, baker.lightmaps(), baked);
-        write_exr(fs::path(args.out) / "preview.exr", preview,
-                  {{"freqlab", "0.1"}, {"scene", args.scene}, {"method", to_string(method)}});
+        write_exr(fs::path(args.out) / "preview.exr", preview, bake_provenance);
         DisplayParams display;
         write_png(fs::path(args.out) / "preview.png", w, h,
-                  layer_to_rgb8(preview, preview.get("color"), display));
+                  layer_to_rgb8(preview, preview.get("color"), display), bake_provenance);
     }
     if (!args.debug_texel.empty())
         print_debug_texel(rays, media, tables.get(), settings, baker, args.debug_texel);

@@ -420,7 +420,11 @@ int run_bench_bake_thickness(const BenchArgs& a) {
     Cluster& cluster = Cluster::world();
     const WorkPart part = bench_work_part(a);
     BakeStudy study(a, "bake-thickness");
-    const ImpulseTables tables = ImpulseTables::cached(kDefaultTableBounces);
+    std::unique_ptr<ImpulseTables> loaded;
+    cluster.rank0_first([&] {
+        loaded = std::make_unique<ImpulseTables>(ImpulseTables::cached(kDefaultTableBounces));
+    });
+    const ImpulseTables& tables = *loaded;
     if (cluster.rank() == 0) fs::create_directories(a.out);
     std::vector<MediumDesc> original;
     for (size_t i = 0; i < study.media.size(); ++i) original.push_back(study.media.desc(i));

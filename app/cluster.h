@@ -56,6 +56,15 @@ class Cluster {
     void barrier() const;
     // Every rank's bytes at rank 0 (index = rank); other ranks get an empty vector.
     std::vector<std::string> gather(const std::string& mine, int tag) const;
+    // Runs `work` on rank 0 first and on the other ranks after it (every rank calls this):
+    // e.g. the impulse tables, which rank 0 tabulates into the shared cache folder and the
+    // others then load instead of each tabulating them.
+    template <class Work>
+    void rank0_first(Work&& work) const {
+        if (rank_ != 0) barrier();
+        work();
+        if (rank_ == 0) barrier();
+    }
     // Prints "rank R of N (WORK): MESSAGE" and ends every rank with `code`.
     [[noreturn]] void abort(int code, const std::string& message) const;
 

@@ -24,6 +24,7 @@
 #include "image/image_io.h"
 #include "image/layer_codec.h"
 #include "render/frame_renderer.h"
+#include "scene/provenance.h"
 #include "scene/scene_loader.h"
 
 namespace freqlab {
@@ -110,8 +111,12 @@ RenderedFrame decode_frame(const std::string& bytes, int rank) {
 // The files of one frame, exactly as a one-process render writes them.
 class FrameWriter {
   public:
-    FrameWriter(const RenderArgs& args, const RenderConfig& config, const SettingsGroup& settings)
-        : args_(args), config_(config), settings_json_(settings.to_json()) {}
+    FrameWriter(const RenderArgs& args, const Scene& scene, const RenderConfig& config,
+                const SettingsGroup& settings)
+        : args_(args),
+          config_(config),
+          provenance_(
+              output_provenance(scene, args.method, settings.to_json(), long(config.frame.seed))) {}
 
     void write(const RenderedFrame& f) {
         if (f.stats.value("nonfinite", 0L) > 0)
@@ -119,15 +124,15 @@ class FrameWriter {
                          f.frame, f.stats["nonfinite"].get<long>());
         char name[32];
         std::snprintf(name, sizeof name, "frame_%04d", f.frame);
-        const json provenance = {{"freqlab", "0.1"},          {"scene", args_.scene},
-                                 {"method", args_.method},    {"frame", f.frame},
-                                 {"time_s", f.time_s},        {"seed", config_.frame.seed},
-                                 {"settings", settings_json_}};
+        json provenance = provenance_;
+        provenance["frame"] = f.frame;
+        provenance["time_s"] = f.time_s;
         write_exr(fs::path(args_.out) / (std::string(name) + ".exr"), f.layers, provenance);
         DisplayParams display;
         display.exposure_ev = config_.frame.exposure;
         write_png(fs::path(args_.out) / (std::string(name) + ".png"), f.layers.width(),
-                  f.layers.height(), layer_to_rgb8(f.layers, f.layers.get("color"), display));
+                  f.layers.height(), layer_to_rgb8(f.layers, f.layers.get("color"), display),
+                  provenance);
         std::lock_guard<std::mutex> lock(mutex_);
         frames_.push_back(f.stats);
     }
@@ -143,7 +148,7 @@ class FrameWriter {
   private:
     const RenderArgs& args_;
     const RenderConfig& config_;
-    json settings_json_;
+    json provenance_;
     std::mutex mutex_;
     std::vector<json> frames_;
 };
@@ -239,7 +244,7 @@ int run_render(const RenderArgs& args) {
         if (ec || !fs::is_directory(args.out))
             throw Error(args.out, "--out", "cannot create the output directory: " + ec.message());
     }
-    FrameWriter frames(args, config, settings);
+    FrameWriter frames(args, scene, config, settings);
     // Progress of this process's own frames (warm-up included); rank 0's bar shows its own.
     const int end = plan.keep.empty() ? plan.start : plan.keep.back() + 1;
     Progress progress;

@@ -1,6 +1,8 @@
 // Multi-layer EXR: every layer, kind and legend survives a write/read bit-exactly.
 #include <gtest/gtest.h>
 
+#include <OpenImageIO/imageio.h>
+
 #include <cstring>
 #include <filesystem>
 
@@ -71,4 +73,18 @@ TEST(Exr, NoTemporaryFileIsLeftBehind) {
         ++files;
     }
     EXPECT_EQ(files, 1);
+}
+
+// A PNG carries the provenance in a text chunk, as an EXR does in its header.
+TEST(Exr, PngCarriesTheProvenanceInATextChunk) {
+    const std::filesystem::path file =
+        std::filesystem::temp_directory_path() / "freqlab_test_provenance.png";
+    const nlohmann::json prov = {{"method", "mis"}, {"seed", 7}, {"media", {{{"g", 0.9}}}}};
+    write_png(file, 2, 1, {255, 0, 0, 0, 255, 0}, prov);
+    auto in = OIIO::ImageInput::open(file.string());
+    ASSERT_TRUE(in);
+    const std::string text = in->spec().get_string_attribute("freqlab:provenance");
+    in->close();
+    std::filesystem::remove(file);
+    EXPECT_EQ(nlohmann::json::parse(text), prov);
 }

@@ -7,6 +7,8 @@
 // through the public methods below rather than through pixels alone.
 #pragma once
 
+#include <nlohmann/json.hpp>
+
 #include <memory>
 #include <string>
 #include <vector>
@@ -95,6 +97,10 @@ class Workbench {
     // The name exported files of the shown result start with: scene, frame (or the
     // environment view) and layer.
     std::string export_stem() const;
+    // Export > All layers as EXR, to `path`: the shown result's layers with the provenance of
+    // what made them (scene/provenance.h: method, settings, seed, media coefficients in use).
+    void export_exr(const std::string& path) const;
+    nlohmann::json export_provenance() const;
     const std::string& status() const;
 
     struct State;  // defined in workbench.cpp; public so its helper functions can name it

@@ -9,6 +9,8 @@
 #include "base/error.h"
 #include "base/stopwatch.h"
 #include "math/sh.h"
+#include "scene/provenance.h"
+#include "settings/settings_group.h"
 #include "settings_panel.h"
 #include "volume/impulse_tables.h"
 #include "volume/lightmap_preview.h"
@@ -331,6 +333,17 @@ void apply_bake_setting(Workbench::State& s, const std::string& assignment) {
     b.settings = edited;
     b.baker_dirty = true;
     restart_bake(s);
+}
+
+nlohmann::json bake_provenance(const Workbench::State& s) {
+    const BakeSession& b = *s.bake;
+    BakeSettings settings = b.settings;
+    SettingsGroup group;
+    group.bind(BakeSettings::schema(), &settings);
+    std::vector<MediumDesc> media;  // the coefficients the sliders set, not the scene's
+    for (size_t i = 0; i < b.media->size(); ++i) media.push_back(b.media->desc(i));
+    return output_provenance(s.scene, to_string(bake_method(s)), group.to_json(),
+                             long(settings.seed), media);
 }
 
 BakeSessionFile bake_session_file(const Workbench::State& s) {

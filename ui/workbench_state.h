@@ -109,6 +109,9 @@ void draw_probe_lobes(Workbench::State& s);
 BakeMethod bake_method(const Workbench::State& s);  // needs s.bake
 // A bake.* assignment (Workbench::apply_setting): the bake restarts with it.
 void apply_bake_setting(Workbench::State& s, const std::string& assignment);
+// What an export of the bake says made it (scene/provenance.h): its method, bake.* settings,
+// seed and the media coefficients in use.
+nlohmann::json bake_provenance(const Workbench::State& s);
 // A bake's part of the session file (its state now).
 BakeSessionFile bake_session_file(const Workbench::State& s);
 // Stops the bake and takes the file's state (needs s.bake; the caller restarts it).

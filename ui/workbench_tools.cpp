@@ -4,16 +4,20 @@
 #include <imgui.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <optional>
+#include <set>
 
 #include "base/error.h"
 #include "base/file_io.h"
 #include "image/image_io.h"
 #include "scene/json_reader.h"
+#include "scene/provenance.h"
 #include "scene/scene_loader.h"
 #include "workbench_state.h"
 
@@ -59,20 +63,65 @@ void attach_reference(Workbench::State& s, int frame) {
 
 namespace {
 
+// Letters, digits, '.', '_' and '-' only: "builtin:default" made names with ':' that some file
+// systems and tools refuse.
+std::string portable_name(std::string name) {
+    for (char& c : name)
+        if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '_' && c != '-')
+            c = '_';
+    return name;
+}
+
 std::string file_stem(const Workbench::State& s) {
     // The environment view is no frame of the animation: its files say what they hold.
     if (s.shown && s.shown->environment_view)
-        return s.scene.name + "_environment_bandwidth_" + s.layer_name;
+        return portable_name(s.scene.name + "_environment_bandwidth_" + s.layer_name);
     char stem[128];
     std::snprintf(stem, sizeof stem, "%s_frame%04d_%s", s.scene.name.c_str(),
                   s.shown ? s.shown->frame : s.frame, s.layer_name.c_str());
-    return stem;
+    return portable_name(stem);
+}
+
+// What made the exported frame: scene, method, every setting, seed, media, version.
+json export_provenance(const Workbench::State& s) {
+    json p;
+    if (s.bake) {
+        p = bake_provenance(s);
+    } else {
+        RenderConfig config = s.config;  // settings_group() binds to a mutable config
+        p = output_provenance(s.scene, render_method_info(config.method).name,
+                              config.settings_group().to_json(), long(config.frame.seed));
+    }
+    if (s.shown && !s.bake) p["frame"] = s.shown->frame;
+    return p;
+}
+
+// A stats object as flat columns: nested objects by dotted keys ("stages.gbuffer",
+// "discards.temporal"); numbers and booleans only (lists and text stay in stats.json).
+void flatten_stats(const json& stats, const std::string& prefix,
+                   std::map<std::string, double>& out) {
+    for (const auto& [key, value] : stats.items()) {
+        if (value.is_object())
+            flatten_stats(value, prefix + key + ".", out);
+        else if (value.is_number() || value.is_boolean())
+            out[prefix + key] =
+                value.is_boolean() ? double(value.get<bool>()) : value.get<double>();
+    }
 }
 
 }  // namespace
 
 std::string Workbench::export_stem() const {
     return file_stem(*s_);
+}
+
+nlohmann::json Workbench::export_provenance() const {
+    return ::freqlab::ui::export_provenance(*s_);
+}
+
+void Workbench::export_exr(const std::string& path) const {
+    if (!s_->shown) throw Error(path, "export", "no result is shown yet");
+    write_exr(path, s_->shown->layers, ::freqlab::ui::export_provenance(*s_));
 }
 
 void poll_reference(Workbench::State& s) {
@@ -165,6 +214,35 @@ void render_reference_view(Workbench::State& s, const DisplayParams& params) {
         s.reference_view.render(it->second, it->second.get("color"), params);
 }
 
+std::string stats_csv(const Workbench::State& s) {
+    // Every per-frame stat a frame has (a column per dotted key; empty where a frame lacks
+    // it), under the provenance as "# key: value" lines.
+    std::map<int, std::map<std::string, double>> rows;
+    std::set<std::string> columns;
+    {
+        std::lock_guard<std::mutex> lock(s.results_mutex);
+        for (const auto& [f, r] : s.results) {
+            flatten_stats(r.stats, "", rows[f]);
+            for (const auto& [key, v] : rows[f]) columns.insert(key);
+        }
+    }
+    columns.erase("frame");
+    std::string csv = provenance_csv_header(export_provenance(s)) + "frame";
+    for (const std::string& c : columns) csv += "," + c;
+    csv += "\n";
+    for (const auto& [f, row] : rows) {
+        csv += std::to_string(f);
+        for (const std::string& c : columns) {
+            auto it = row.find(c);
+            char number[32] = "";
+            if (it != row.end()) std::snprintf(number, sizeof number, "%.17g", it->second);
+            csv += std::string(",") + number;
+        }
+        csv += "\n";
+    }
+    return csv;
+}
+
 void draw_export_menu(Workbench::State& s) {
     if (!ImGui::BeginMenu("Export")) return;
     try {
@@ -190,13 +268,13 @@ void draw_export_menu(Workbench::State& s) {
                 fs::create_directories(kExportDir);
                 const fs::path out =
                     kExportDir / (file_stem(s) + "_x" + std::to_string(scale) + ".png");
-                write_png(out, offscreen.width(), offscreen.height(), rgb);
+                write_png(out, offscreen.width(), offscreen.height(), rgb, export_provenance(s));
                 s.status = "wrote " + out.string();
             }
             if (ImGui::MenuItem("All layers as EXR")) {
                 fs::create_directories(kExportDir);
                 const fs::path out = kExportDir / (file_stem(s) + ".exr");
-                write_exr(out, L, {{"scene", s.scene.source}, {"frame", s.shown->frame}});
+                write_exr(out, L, export_provenance(s));  // as Workbench::export_exr
                 s.status = "wrote " + out.string();
             }
             if (ImGui::MenuItem("Add inset at the inspected pixel", nullptr, false,
@@ -219,23 +297,15 @@ void draw_export_menu(Workbench::State& s) {
                              s.layer_name;
                 fs::create_directories(kExportDir);
                 const fs::path out = kExportDir / (file_stem(s) + "_figure.png");
-                write_figure(out, L, spec);
+                write_figure(out, L, spec, export_provenance(s));
                 s.status = "wrote " + out.string();
             }
         }
         if (ImGui::MenuItem("Stats as CSV")) {
-            std::string csv = "frame,time_ms,rays,pixels_shaded\n";
-            {
-                std::lock_guard<std::mutex> lock(s.results_mutex);
-                for (const auto& [f, r] : s.results)
-                    csv += std::to_string(f) + "," +
-                           std::to_string(r.stats["time_ms"].get<double>()) + "," +
-                           std::to_string(r.stats["rays"].get<long>()) + "," +
-                           std::to_string(r.stats["pixels_shaded"].get<long>()) + "\n";
-            }
+            const fs::path out = kExportDir / (portable_name(s.scene.name) + "_stats.csv");
             fs::create_directories(kExportDir);
-            write_text_atomically(kExportDir / (s.scene.name + "_stats.csv"), csv);
-            s.status = "wrote " + (kExportDir / (s.scene.name + "_stats.csv")).string();
+            write_text_atomically(out, stats_csv(s));
+            s.status = "wrote " + out.string();
         }
     } catch (const Error& e) {
         s.error = e.what();

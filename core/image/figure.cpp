@@ -159,9 +159,10 @@ FigureImage compose_figure(const LayerSet& set, const FigureSpec& spec) {
     return fig;
 }
 
-void write_figure(const std::filesystem::path& path, const LayerSet& set, const FigureSpec& spec) {
+void write_figure(const std::filesystem::path& path, const LayerSet& set, const FigureSpec& spec,
+                  const nlohmann::json& provenance) {
     const FigureImage fig = compose_figure(set, spec);
-    write_png(path, fig.width, fig.height, fig.rgb);
+    write_png(path, fig.width, fig.height, fig.rgb, provenance);
 }
 
 }  // namespace freqlab

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "image/colormap.h"
 #include "image/layers.h"
 
@@ -40,6 +42,8 @@ struct FigureImage {
 
 // Composes the figure; throws Error naming the field for a bad layer, inset or font.
 FigureImage compose_figure(const LayerSet& set, const FigureSpec& spec);
-void write_figure(const std::filesystem::path& path, const LayerSet& set, const FigureSpec& spec);
+// `provenance` (scene/provenance.h) goes into the PNG's freqlab:provenance text chunk.
+void write_figure(const std::filesystem::path& path, const LayerSet& set, const FigureSpec& spec,
+                  const nlohmann::json& provenance = nlohmann::json::object());
 
 }  // namespace freqlab

@@ -243,9 +243,11 @@ RgbImage read_rgb_image(const fs::path& path, bool require_finite) {
     return img;
 }
 
-void write_png(const fs::path& path, int width, int height,
-               const std::vector<unsigned char>& rgb8) {
+void write_png(const fs::path& path, int width, int height, const std::vector<unsigned char>& rgb8,
+               const json& provenance) {
     ImageSpec spec(width, height, 3, TypeDesc::UINT8);
+    // A tEXt chunk "freqlab:provenance" (scene/provenance.h), like the EXR header's.
+    if (!provenance.empty()) spec.attribute("freqlab:provenance", provenance.dump());
     write_atomically(path, [&](const fs::path& tmp) {
         auto out = ImageOutput::create(tmp.string());
         if (!out || !out->open(tmp.string(), spec) ||

@@ -44,7 +44,9 @@ ImageHeader read_image_header(const std::filesystem::path& path);
 RgbImage read_rgb_image(const std::filesystem::path& path, bool require_finite = true);
 
 // 8-bit sRGB PNG (RGB), rows from the top.
+// `provenance`, when not empty, goes into a tEXt chunk named freqlab:provenance.
 void write_png(const std::filesystem::path& path, int width, int height,
-               const std::vector<unsigned char>& rgb8);
+               const std::vector<unsigned char>& rgb8,
+               const nlohmann::json& provenance = nlohmann::json::object());
 
 }  // namespace freqlab

@@ -221,6 +221,11 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
         q.shift = s.shift;
         q.medium = m;
         q.medium.g = std::clamp(m.g, -kGRange, kGRange);
+        // Say what the tables were queried at: beyond their range they answer for |g| = 0.6
+        // and only the Monte Carlo corrections (single_correction, the walks) see the real g.
+        if (q.medium.g != m.g)
+            line("  tables queried at g %.3f (their range is |g| <= %.1f), not the medium's %.3f",
+                 q.medium.g, kGRange, m.g);
         q.last_bounce = std::min(settings_.media_bounces, table_bounces_);
         q.receiver = Receiver::OnSurface;
         if (!(q.distance > 0.0) || m.sigma_t() * q.distance > ZhDistanceTable::kMaxD) continue;

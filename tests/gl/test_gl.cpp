@@ -18,6 +18,7 @@
 #include "gl_host.h"
 #include "gl_session.h"
 #include "image/colormap.h"
+#include "image/image_io.h"
 #include "layer_view.h"
 #include "osmesa_host.h"
 #include "workbench.h"
@@ -315,6 +316,56 @@ LayerSet shown_layers(GlSession& gl, Workbench& wb) {
 }
 
 }  // namespace
+
+// An export says what made it: after the media sliders moved (a session carrying sigma_s 1.4 and
+// g 0.5), the EXR's provenance holds those coefficients, the method, the bake settings, the seed,
+// the scene's hash and freqlab's version; a render's holds its settings and frame.
+TEST(GlWorkbench, ExportsCarryTheValuesUsed) {
+    const fs::path dir = fs::temp_directory_path() / "freqlab_export_provenance";
+    fs::create_directories(dir);
+    GlSession gl;
+    WorkbenchOptions o;
+    o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/cornell_fog.json";
+    o.method = "extinction";
+    o.settings = {"frame.width=96",       "frame.height=72", "bake.spp=2",
+                  "bake.texel_density=4", "bake.probes_x=0", "bake.seed=17"};
+    {
+        Workbench wb(o);
+        run_until_shown(gl, wb);
+        wb.save_session((dir / "saved.json").string());
+    }
+    nlohmann::json session = read_json(dir / "saved.json");
+    session["bake"]["media"][0]["sigma_s"] = 1.4;
+    session["bake"]["media"][0]["g"] = 0.5;
+    write_json(dir / "moved.json", session);
+    Workbench wb(WorkbenchOptions{});
+    wb.load_session((dir / "moved.json").string());
+    shown_layers(gl, wb);
+    wb.export_exr((dir / "bake.exr").string());
+    const ExrFile bake = read_exr(dir / "bake.exr");
+    const nlohmann::json& p = bake.provenance;
+    EXPECT_EQ(p["method"], "extinction");
+    EXPECT_EQ(p["seed"], 17);
+    EXPECT_EQ(p["settings"]["bake"]["spp"], 2);
+    ASSERT_EQ(p["media"].size(), 1u);
+    EXPECT_DOUBLE_EQ(p["media"][0]["sigma_s"].get<double>(), 1.4);
+    EXPECT_DOUBLE_EQ(p["media"][0]["g"].get<double>(), 0.5);
+    EXPECT_EQ(p["scene_hash"].get<std::string>().size(), 16u);
+    EXPECT_EQ(p["freqlab"].get<std::string>().rfind("0.1+", 0), 0u) << p["freqlab"];
+
+    WorkbenchOptions r;
+    r.scene = "builtin:default";
+    r.settings = {"frame.width=64", "frame.height=36", "frame.exposure=1.5"};
+    Workbench render(r);
+    run_until_shown(gl, render);
+    render.export_exr((dir / "render.exr").string());
+    const nlohmann::json q = read_exr(dir / "render.exr").provenance;
+    EXPECT_EQ(q["method"], "gbuffer");
+    EXPECT_EQ(q["frame"], 0);
+    EXPECT_DOUBLE_EQ(q["settings"]["frame"]["exposure"].get<double>(), 1.5);
+    EXPECT_EQ(q["media"].size(), 0u);
+    fs::remove_all(dir);
+}
 
 // A bake's session keeps its method, bake settings and media coefficients: loading a session
 // whose fog has sigma_s 1.4 bakes exactly what a scene file with that fog bakes, a bad
