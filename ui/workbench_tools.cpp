@@ -234,9 +234,8 @@ std::string stats_csv(const Workbench::State& s) {
         csv += std::to_string(f);
         for (const std::string& c : columns) {
             auto it = row.find(c);
-            char number[32] = "";
-            if (it != row.end()) std::snprintf(number, sizeof number, "%.17g", it->second);
-            csv += std::string(",") + number;
+            // The shortest text that reads back as the same double.
+            csv += "," + (it != row.end() ? json(it->second).dump() : std::string());
         }
         csv += "\n";
     }
