@@ -127,6 +127,49 @@ TEST(FuzzFindings, ExrAttributeLargerThanTheFileIsRefused) {
     fs::remove(p);
 }
 
+// OpenEXR 3.1 reads a channel list until its empty name and a known type by its own size,
+// whatever the declared size says; where they disagree it reads on from another offset
+// (fuzz_env_exr: a 206-byte file, an attribute size read out of "\0com", 1.8 GB allocated).
+// The walk refuses such a header by name; a file OpenEXR wrote still reads.
+TEST(FuzzFindings, ExrValueSizesMustBeTheTypesOwn) {
+    const fs::path p = temp_file("chlist.exr");
+    LayerSet layers(4, 2);
+    layers.add("color", LayerKind::Color, 3);
+    write_exr(p, layers);
+    const std::string valid = read_bytes(p);
+    EXPECT_EQ(read_rgb_image(p).width, 4);
+    const size_t at = valid.find("channels");
+    ASSERT_NE(at, std::string::npos);
+    const size_t size_at = at + std::strlen("channels") + 1 + std::strlen("chlist") + 1;
+    int32_t declared = 0;
+    std::memcpy(&declared, &valid[size_at], 4);
+    // The list's structure is its entries and the empty name; declaring 18 bytes fewer leaves
+    // OpenEXR reading the rest as the next attribute.
+    std::string bytes = valid;
+    const int32_t shorter = declared - 18;
+    std::memcpy(&bytes[size_at], &shorter, 4);
+    write_bytes(p, bytes);
+    Error e = expect_error([&] { read_rgb_image(p); });
+    EXPECT_EQ(e.field(), "header.channels") << e.what();
+    // A compression attribute declaring 4 bytes (OpenEXR reads 1).
+    bytes = valid;
+    const size_t c = bytes.find("compression");
+    ASSERT_NE(c, std::string::npos);
+    const int32_t four = 4;
+    std::memcpy(&bytes[c + 2 * (std::strlen("compression") + 1)], &four, 4);
+    write_bytes(p, bytes);
+    e = expect_error([&] { read_rgb_image(p); });
+    EXPECT_EQ(e.field(), "header.compression") << e.what();
+    EXPECT_NE(e.message().find("which is 1"), std::string::npos) << e.what();
+    // The fuzzer's own input.
+    const Error f = expect_error([&] {
+        read_rgb_image(std::string(FREQLAB_SOURCE_DIR) +
+                       "/tests/fuzz/corpus/env_exr/chlist-past-its-size.exr");
+    });
+    EXPECT_EQ(f.field(), "header.channels") << f.what();
+    fs::remove(p);
+}
+
 // OpenImageIO buffers a whole compression chunk (DWAB: 256 rows) of a 2 x 1e6 image: 2.3 GB.
 TEST(FuzzFindings, ImageSizeLimitsNameTheResolution) {
     EXPECT_NO_THROW(check_image_size("a.exr", 8192, 4096, 4));

@@ -11,13 +11,33 @@ namespace freqlab {
 
 namespace {
 
+// The size OpenEXR 3.1 reads for a known attribute type whatever the declared size says (it
+// reads the value by its type), or -1 for types it reads by the declared size.
+int fixed_value_size(const std::string& type) {
+    static const std::pair<const char*, int> kSizes[] = {
+        {"box2i", 16},   {"box2f", 16},    {"compression", 1}, {"chromaticities", 32},
+        {"double", 8},   {"envmap", 1},    {"float", 4},       {"int", 4},
+        {"keycode", 28}, {"lineOrder", 1}, {"m33f", 36},       {"m33d", 72},
+        {"m44f", 64},    {"m44d", 128},    {"rational", 8},    {"tiledesc", 9},
+        {"timecode", 8}, {"v2i", 8},       {"v2f", 8},         {"v2d", 16},
+        {"v3i", 12},     {"v3f", 12},      {"v3d", 24},        {"deepImageState", 1}};
+    for (const auto& [name, size] : kSizes)
+        if (type == name) return size;
+    return -1;
+}
+
 // An EXR header is a list of (name\0, type\0, int32 size, value[size]) ended by an empty name;
 // a multi-part file has several such lists, ended by an empty list. Values are skipped (seek),
-// so a large file costs only its header's bytes.
+// so a large file costs only its header's bytes. OpenEXR 3.1 reads a known type's value by its
+// type, not by the declared size (a channel list until its empty name, a preview by its
+// width x height), and names of at most 31 bytes without the long-names flag: where the two
+// disagree, OpenEXR goes on reading from another offset than the declared one (fuzz_env_exr: a
+// 206-byte file whose channel list ran past its size made it allocate 1.8 GB for an attribute
+// read out of "\0com"). Such headers are refused here.
 class AttributeWalker {
   public:
-    AttributeWalker(const std::string& file, std::ifstream& in, size_t file_size)
-        : file_(file), in_(in), size_(file_size) {}
+    AttributeWalker(const std::string& file, std::ifstream& in, size_t file_size, bool long_names)
+        : file_(file), in_(in), size_(file_size), max_name_(long_names ? 255 : 31) {}
 
     void walk(bool multipart) {
         pos_ = 8;  // magic + version
@@ -38,8 +58,15 @@ class AttributeWalker {
                     fail("header." + name, "declares " + std::to_string(size) + " bytes of " +
                                                type + ", the file has " +
                                                std::to_string(size_ - pos_) + " left");
-                if (name == "dataWindow" && type == "box2i" && size == 16) check_window();
-                pos_ += size_t(size);
+                const int fixed = fixed_value_size(type);
+                if (fixed >= 0 && size != fixed)
+                    fail("header." + name, "declares " + std::to_string(size) + " bytes for a " +
+                                               type + ", which is " + std::to_string(fixed));
+                const size_t end = pos_ + size_t(size);
+                if (name == "dataWindow" && type == "box2i") check_window();
+                if (type == "chlist") check_channel_list(name, end);
+                if (type == "preview") check_preview(name, size);
+                pos_ = end;
                 in_.seekg(std::streamoff(pos_));
             }
             if (attributes == 0 && !multipart) fail("header", "has no attributes");
@@ -48,6 +75,36 @@ class AttributeWalker {
     }
 
   private:
+    // Entries (name\0, pixel type, pLinear, 3 reserved, x and y sampling: 16 bytes) up to an
+    // empty name, which must end exactly at the declared size.
+    void check_channel_list(const std::string& name, size_t end) {
+        for (int entry = 0;; ++entry) {
+            if (pos_ >= end) fail("header." + name, "channel list runs past its declared size");
+            if (read_name("channel name").empty()) break;
+            if (end - std::min(end, pos_) < 16)
+                fail("header." + name, "channel entry " + std::to_string(entry) +
+                                           " runs past the list's declared size");
+            pos_ += 16;
+            in_.seekg(std::streamoff(pos_));
+        }
+        if (pos_ != end)
+            fail("header." + name, "channel list ends " + std::to_string(end - pos_) +
+                                       " bytes before its declared size");
+    }
+    // Width and height (uint32 each), then width x height RGBA bytes.
+    void check_preview(const std::string& name, int32_t size) {
+        unsigned char le[8];
+        if (size < 8 || !in_.read(reinterpret_cast<char*>(le), 8))
+            fail("header." + name, "preview shorter than its size fields");
+        const uint64_t w =
+            uint32_t(le[0]) | uint32_t(le[1]) << 8 | uint32_t(le[2]) << 16 | uint32_t(le[3]) << 24;
+        const uint64_t h =
+            uint32_t(le[4]) | uint32_t(le[5]) << 8 | uint32_t(le[6]) << 16 | uint32_t(le[7]) << 24;
+        if (8 + 4 * w * h != uint64_t(size))
+            fail("header." + name, "preview of " + std::to_string(w) + " x " + std::to_string(h) +
+                                       " needs " + std::to_string(8 + 4 * w * h) +
+                                       " bytes, declares " + std::to_string(size));
+    }
     // OpenEXR sizes its line buffers from the data window before any pixel is read (fuzz_env_exr:
     // an inverted window cost seconds of allocation), so the window is checked here first.
     void check_window() {
@@ -81,7 +138,9 @@ class AttributeWalker {
         for (int c = next();; c = next()) {
             if (c == EOF || c < 0) fail("header", "truncated in an " + what);
             if (c == 0) return name;
-            if (name.size() >= 255) fail("header", what + " is longer than 255 bytes");
+            if (int(name.size()) >= max_name_)
+                fail("header", what + " is longer than " + std::to_string(max_name_) + " bytes" +
+                                   (max_name_ < 255 ? " (no long-names flag)" : ""));
             name += char(c);
         }
     }
@@ -91,6 +150,7 @@ class AttributeWalker {
     std::string file_;
     std::ifstream& in_;
     size_t size_, pos_ = 0;
+    int max_name_;
 };
 
 }  // namespace
@@ -102,11 +162,12 @@ void check_exr_attributes(const std::filesystem::path& path) {
     in.read(head, 8);
     const unsigned char magic[4] = {0x76, 0x2f, 0x31, 0x01};
     if (in.gcount() < 8 || std::memcmp(head, magic, 4) != 0) return;
-    const bool multipart = (static_cast<unsigned char>(head[5]) & 0x10) != 0;  // version bit 12
+    const bool multipart = (static_cast<unsigned char>(head[5]) & 0x10) != 0;   // version bit 12
+    const bool long_names = (static_cast<unsigned char>(head[5]) & 0x04) != 0;  // version bit 10
     std::error_code ec;
     const auto size = std::filesystem::file_size(path, ec);
     if (ec) return;
-    AttributeWalker(path.string(), in, size_t(size)).walk(multipart);
+    AttributeWalker(path.string(), in, size_t(size), long_names).walk(multipart);
 }
 
 void check_image_size(const std::filesystem::path& path, long long width, long long height,
