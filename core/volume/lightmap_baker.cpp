@@ -211,6 +211,17 @@ namespace {
 constexpr uint32_t kShareMagic = 0x464c4253;  // "FLBS"
 }
 
+template <class RowFn, class ProbeFn>
+void LightmapBaker::for_each_in_share(int index, RowFn row_fn, ProbeFn probe_fn) const {
+    long row = 0;
+    for (size_t mi = 0; mi < maps_.size(); ++mi)
+        for (int y = 0; y < maps_[mi].height; ++y, ++row)
+            if (in_share(row, index))
+                row_fn(mi, size_t(y) * maps_[mi].width, size_t(maps_[mi].width));
+    for (size_t i = 0; i < probe_sums_.size(); ++i)
+        if (in_share(long(i), index)) probe_fn(i);
+}
+
 std::string LightmapBaker::encode_share() const {
     ByteWriter w;
     w.put(kShareMagic);
@@ -219,21 +230,17 @@ std::string LightmapBaker::encode_share() const {
     w.put<int64_t>(stats_.rays);
     w.put<int64_t>(stats_.impulse_queries);
     w.put<int64_t>(stats_.guarded);
-    long row = 0;
-    for (size_t mi = 0; mi < maps_.size(); ++mi)
-        for (int y = 0; y < maps_[mi].height; ++y, ++row)
-            if (in_share(row, share_index_)) {
-                const size_t at = size_t(y) * maps_[mi].width, n = size_t(maps_[mi].width);
-                w.put_bytes(&sums_[mi][at], n * sizeof(IrradianceParts));
-                w.put_bytes(&deferred_sums_[mi][at], n * sizeof(IrradianceParts));
-                TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
-                for (size_t x = 0; x < n; ++x)
-                    set_texel_filter_guide(guide, x, fixed_[mi][at + x], sums_[mi][at + x]);
-                w.put_bytes(guide.shadows.data(), n * sizeof(uint64_t));
-            }
-    for (size_t i = 0; i < probe_sums_.size(); ++i)
-        if (in_share(long(i), share_index_))
-            w.put_bytes(&probe_sums_[i], sizeof(BakeEstimator::ProbeParts));
+    for_each_in_share(
+        share_index_,
+        [&](size_t mi, size_t at, size_t n) {
+            w.put_bytes(&sums_[mi][at], n * sizeof(IrradianceParts));
+            w.put_bytes(&deferred_sums_[mi][at], n * sizeof(IrradianceParts));
+            TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
+            for (size_t x = 0; x < n; ++x)
+                set_texel_filter_guide(guide, x, fixed_[mi][at + x], sums_[mi][at + x]);
+            w.put_bytes(guide.shadows.data(), n * sizeof(uint64_t));
+        },
+        [&](size_t i) { w.put_bytes(&probe_sums_[i], sizeof(BakeEstimator::ProbeParts)); });
     return std::move(w.bytes());
 }
 
@@ -246,18 +253,14 @@ void LightmapBaker::add_share(const std::string& bytes, int index, const std::st
     stats_.rays += long(r.get<int64_t>());
     stats_.impulse_queries += long(r.get<int64_t>());
     stats_.guarded += long(r.get<int64_t>());
-    long row = 0;
-    for (size_t mi = 0; mi < maps_.size(); ++mi)
-        for (int y = 0; y < maps_[mi].height; ++y, ++row)
-            if (in_share(row, index)) {
-                const size_t at = size_t(y) * maps_[mi].width, n = size_t(maps_[mi].width);
-                r.get_bytes(&sums_[mi][at], n * sizeof(IrradianceParts));
-                r.get_bytes(&deferred_sums_[mi][at], n * sizeof(IrradianceParts));
-                r.get_bytes(&share_shadows_[mi][at], n * sizeof(uint64_t));
-            }
-    for (size_t i = 0; i < probe_sums_.size(); ++i)
-        if (in_share(long(i), index))
-            r.get_bytes(&probe_sums_[i], sizeof(BakeEstimator::ProbeParts));
+    for_each_in_share(
+        index,
+        [&](size_t mi, size_t at, size_t n) {
+            r.get_bytes(&sums_[mi][at], n * sizeof(IrradianceParts));
+            r.get_bytes(&deferred_sums_[mi][at], n * sizeof(IrradianceParts));
+            r.get_bytes(&share_shadows_[mi][at], n * sizeof(uint64_t));
+        },
+        [&](size_t i) { r.get_bytes(&probe_sums_[i], sizeof(BakeEstimator::ProbeParts)); });
     if (r.remaining() != 0) throw Error(source, "share", "bytes past the end");
 }
 

@@ -102,6 +102,10 @@ class LightmapBaker {
     std::vector<std::vector<uint64_t>> share_shadows_;
     // Whether global texel row `row` / probe `probe` belongs to share `index`.
     bool in_share(long row, int index) const { return row % share_count_ == index; }
+    // row_fn(lightmap, first texel, texels) for each texel row of share `index`, then
+    // probe_fn(probe) for each of its probes: what a share's bytes hold, in their order.
+    template <class RowFn, class ProbeFn>
+    void for_each_in_share(int index, RowFn row_fn, ProbeFn probe_fn) const;
 };
 
 // The random numbers of sample `sample` of texel `texel` of lightmap `lightmap` (probes: lightmap
