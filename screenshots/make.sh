@@ -50,3 +50,11 @@ shot bake_haze_occluder_split.png scenes/analytic/haze_occluder.json --method im
 shot bake_mc_unfiltered.png scenes/analytic/haze_occluder.json --method impulse \
      --set bake.spp=256 --set bake.texel_density=8 --set bake.probes_x=0 --set bake.texel_mc_radius=0 \
      --set frame.width=480 --set frame.height=360 --size 1280x800
+# A paper figure of a categorical layer: what Export > Figure writes in the workbench (the same
+# pixels, checked by hand under Xvfb in session 20), from the command line: legend swatches in
+# the layer's own palette (white reused, orange temporal, blue spatial).
+fig_dir=$(mktemp -d)
+"$bin" render scenes/rotor.json --method cache --frames 0:3 --size 640x360 --quiet --out "$fig_dir"
+"$bin" figure "$fig_dir/frame_0002.exr" --layer cache_decisions \
+     --title "rotor, frame 2, cache_decisions" --out screenshots/figure_cache_decisions.png
+rm -rf "$fig_dir"
