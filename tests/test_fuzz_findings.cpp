@@ -307,6 +307,17 @@ TEST(FuzzFindings, ExrDataWindowIsCheckedBeforeOpenExrSizesBuffers) {
 // declares into a buffer sized for its node, then compares (an ASan-confirmed heap-buffer
 // overflow; fuzz_vdb: "double free or corruption" later). The walk follows the tree's topology
 // and buffers and refuses such a chunk before OpenVDB reads it.
+// A root child at x = 2147483647: OpenVDB offsets it by its node's 4095 in int arithmetic
+// (fuzz_vdb, UBSan in openvdb/math/Coord.h). The walk refuses such origins by byte.
+TEST(FuzzFindings, VdbRootOriginPastTheInt32RangeIsRefused) {
+    const std::string bad = std::string(FREQLAB_SOURCE_DIR) +
+                            "/tests/fuzz/corpus/vdb/regression_root_origin_overflow.vdb";
+    EXPECT_NE(check_vdb_layout(bad).find("origin at coordinate 2147483647"), std::string::npos)
+        << check_vdb_layout(bad);
+    const Error e = expect_error([&] { read_vdb_density(bad, "density", "s.json", "media[0]"); });
+    EXPECT_EQ(e.field(), "media[0].file");
+}
+
 TEST(FuzzFindings, VdbValueChunkLargerThanItsNodeIsRefused) {
     const std::string bad = std::string(FREQLAB_SOURCE_DIR) +
                             "/tests/fuzz/corpus/vdb/regression_uncompressed_chunk.vdb";

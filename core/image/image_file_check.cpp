@@ -74,6 +74,8 @@ class AttributeWalker {
         }
     }
 
+    long long window_pixels() const { return window_pixels_; }
+
   private:
     // Entries (name\0, pixel type, pLinear, 3 reserved, x and y sampling: 16 bytes) up to an
     // empty name, which must end exactly at the declared size.
@@ -120,6 +122,7 @@ class AttributeWalker {
                                           std::to_string(v[1]) + ") to (" + std::to_string(v[2]) +
                                           ", " + std::to_string(v[3]) + ")");
         check_image_size(file_, width, height, 1);
+        if (window_pixels_ < 0) window_pixels_ = width * height;
     }
     int next() {
         if (pos_ >= size_) return -1;
@@ -151,23 +154,26 @@ class AttributeWalker {
     std::ifstream& in_;
     size_t size_, pos_ = 0;
     int max_name_;
+    long long window_pixels_ = -1;  // the first data window's width x height
 };
 
 }  // namespace
 
-void check_exr_attributes(const std::filesystem::path& path) {
+long long check_exr_attributes(const std::filesystem::path& path) {
     std::ifstream in(path, std::ios::binary);
-    if (!in) return;  // the decoder names the missing file
+    if (!in) return -1;  // the decoder names the missing file
     char head[8] = {};
     in.read(head, 8);
     const unsigned char magic[4] = {0x76, 0x2f, 0x31, 0x01};
-    if (in.gcount() < 8 || std::memcmp(head, magic, 4) != 0) return;
+    if (in.gcount() < 8 || std::memcmp(head, magic, 4) != 0) return -1;
     const bool multipart = (static_cast<unsigned char>(head[5]) & 0x10) != 0;   // version bit 12
     const bool long_names = (static_cast<unsigned char>(head[5]) & 0x04) != 0;  // version bit 10
     std::error_code ec;
     const auto size = std::filesystem::file_size(path, ec);
-    if (ec) return;
-    AttributeWalker(path.string(), in, size_t(size), long_names).walk(multipart);
+    if (ec) return -1;
+    AttributeWalker walker(path.string(), in, size_t(size), long_names);
+    walker.walk(multipart);
+    return walker.window_pixels();
 }
 
 void check_image_size(const std::filesystem::path& path, long long width, long long height,

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -251,10 +252,25 @@ bool walk_tree(Walk& w, const TreeValues& v, uint32_t compression, int64_t block
     if (uint64_t(counts[0]) * (13 + v.bytes) + uint64_t(counts[1]) * 12 > w.left())
         return w.fail("the root declares " + std::to_string(counts[0]) + " tiles and " +
                       std::to_string(counts[1]) + " children");
-    w.at += size_t(counts[0]) * (13 + v.bytes);
+    // A root entry's origin: OpenVDB offsets it by its node's extent (4096 voxels, 5-4-3
+    // trees) in int arithmetic (fuzz_vdb: origin 2147483647 + 4095, an overflow UBSan caught in
+    // openvdb/math/Coord.h); such coordinates are no grid's.
+    auto origin = [&](const char* what) {
+        int32_t xyz[3];
+        if (!w.read(xyz, what)) return false;
+        for (int32_t c : xyz)
+            if (c > std::numeric_limits<int32_t>::max() - 4095)
+                return w.fail(std::string("a ") + what + " at coordinate " + std::to_string(c) +
+                              ", past the last node int32 coordinates hold");
+        return true;
+    };
+    for (uint32_t t = 0; t < counts[0]; ++t) {
+        if (!origin("root tile's origin")) return false;
+        w.at += v.bytes + 1;  // value, active flag
+    }
     size_t leaves = 0;
     for (uint32_t c = 0; c < counts[1]; ++c) {
-        w.at += 12;  // the child's origin
+        if (!origin("root child's origin")) return false;
         if (!walk_internal(w, v, compression, 5, leaves)) return false;
     }
     if (block_at >= 0 && int64_t(w.at) != block_at)

@@ -7,6 +7,7 @@
 
 #include "base/error.h"
 #include "fuzz_support.h"
+#include "image/image_file_check.h"
 #include "image/image_io.h"
 #include "scene/light.h"
 
@@ -18,6 +19,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         // touches up to 1 GB (the limit read_rgb_image enforces, tested in test_bad_input) and
         // would bring the run to ~100 inputs a second; the header paths stay in (read with the
         // product's checks: OIIO's own open would allocate a damaged header's attribute sizes).
+        // An EXR's window is read by freqlab's own header walk before OpenEXR opens it:
+        // OpenEXR sizes its line buffers from the window at open (a 249-byte file declaring
+        // 983041 x 8 pixels took 3.3 s under ASan, 0.8 s and 190 MB without, as any real
+        // 8-megapixel image does).
+        if (check_exr_attributes(path) > (1 << 18)) return 0;
         const ImageHeader header = read_image_header(path);
         if (double(header.width) * header.height * header.channels > double(1 << 18)) return 0;
         auto image = std::make_shared<RgbImage>(read_rgb_image(path, true));
