@@ -390,7 +390,7 @@ void write_bake_thickness_outputs(const std::string& out, const json& header, co
                std::to_string(sh_i["texels"].get<long>()) + "," +
                std::to_string(row_number(sh_i["lm_irradiance_relmse"])) + "," +
                std::to_string(row_number(sh_e["lm_irradiance_relmse"])) + "," +
-               std::to_string(row_number(sh_i["inscatter_ratio"])) + "," +
+               std::to_string(row_number(sh_i["inscatter_over_reference"])) + "," +
                std::to_string(r["reference_ms"].get<double>()) + "," +
                std::to_string(r["impulse_ms"].get<double>()) + "\n";
         if (tau > 0.0 && e_impulse > 0.0 && e_extinction > 0.0) {
