@@ -155,7 +155,8 @@ int main(int argc, char** argv) {
     tables->add_option("--distance", tq.distance, "to the point emitter / to the medium boundary");
     tables->add_option("--sigma-s", tq.sigma_s, "scattering coefficient");
     tables->add_option("--sigma-a", tq.sigma_a, "absorption coefficient");
-    tables->add_option("--g", tq.g, "Henyey-Greenstein anisotropy, |g| <= 0.6");
+    tables->add_option("--g", tq.g,
+                       "Henyey-Greenstein anisotropy, |g| <= 0.95 (the tables' range)");
     tables->add_option("--shift", tq.shift,
                        "area emitters: sin of the angle between the emitter normal and the "
                        "direction to the receiver, in [0, 1]");

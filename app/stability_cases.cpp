@@ -4,7 +4,8 @@
 // | group       | varied                                                   | methods          |
 // |-------------|----------------------------------------------------------|------------------|
 // | setting     | each field: min, max, middle (full: quartiles too)        | those reading it |
-// | medium      | sigma_s, sigma_a in [0, 1e6], g in (-1, 1), grid density  | bakes            |
+// | medium      | sigma_s, sigma_a in [0, 1e6], g in (-1, 1), grid density  | bakes (impulse   |
+// |             |                                                          | refuses |g|>0.95)|
 // | material    | Phong exponent (0, 1e6], GGX/Beckmann roughness (0, 1]    | renders, bakes   |
 // | camera      | grazing, in a surface, fov near 0 and 180, far away       | renders          |
 // | geometry    | zero-area / collinear / sliver triangles, 1e-5 and 1e5    | renders, bakes   |
@@ -24,6 +25,7 @@
 #include "settings/bake_settings.h"
 #include "settings/settings_group.h"
 #include "volume/bake_estimators.h"
+#include "volume/impulse_response.h"
 
 namespace freqlab {
 
@@ -159,11 +161,17 @@ void add_medium_cases(std::vector<StabilityCase>& out, bool full) {
             for (double sa : absorptions)
                 for (double g : gs) {
                     if (!full && grid && g != gs.front() && g != gs.back() && g != 0) continue;
-                    out.push_back(scene_case(
+                    StabilityCase c = scene_case(
                         "medium",
                         std::string(grid ? "grid" : "homogeneous") + " sigma_s=" + number_text(ss) +
                             " sigma_a=" + number_text(sa) + " g=" + number_text(g),
-                        with_medium(ss, sa, g, grid), false, true));
+                        with_medium(ss, sa, g, grid), false, true);
+                    // Method B's tables stop at |g| = kGRange (volume/impulse_response.h); the
+                    // other bakers take any g the scene format allows.
+                    if (std::abs(g) > kGRange)
+                        c.method_refusals["impulse"] =
+                            "media[" + std::to_string(grid ? 1 : 0) + "].g";
+                    out.push_back(std::move(c));
                 }
     for (double sa : {0.0, 1e-6, 1.0, 1e4, 1e6})
         if (!full)

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -24,7 +25,10 @@ struct StabilityCase {
     // and accepting it a failure.
     bool expect_refusal = false;
     std::string refusal_contains;  // what that error must say
-    std::string note_contains;     // non-empty: a load note (Scene::load_notes) must say this
+    // Methods that must refuse this valid input (beyond what the method can represent, e.g.
+    // method B's tables past |g| = 0.95), and what their error must say; the others must run.
+    std::map<std::string, std::string> method_refusals;
+    std::string note_contains;  // non-empty: a load note (Scene::load_notes) must say this
 };
 
 // The sweep's base scene: a floor, an animated Phong box, a mirror sphere and a sliver quad;

@@ -24,7 +24,9 @@ TEST(AreaTables, RemapsMatchDirectComputationOnTheTablesAxis) {
     int compared = 0;
     for (double sigma_s : {0.1, 0.3, 3.0, 10.0})
         for (double sigma_a : {0.0, 0.1, 1.0})
-            for (double g : {-0.3, 0.2, 0.5}) {
+            // Every g panel (volume/impulse_response.h): -0.93, -0.75 and 0.75, 0.92 are the
+            // outer ones.
+            for (double g : {-0.93, -0.75, -0.3, 0.2, 0.5, 0.75, 0.92}) {
                 // Shifts on bins (between bins the lobe is interpolated, not re-fitted).
                 const int bin = (compared * 3) % kShiftBins;
                 const double shift = shift_of_bin(bin), d = 0.7 / (sigma_s + sigma_a);
@@ -41,7 +43,7 @@ TEST(AreaTables, RemapsMatchDirectComputationOnTheTablesAxis) {
                 }
                 ++compared;
             }
-    EXPECT_EQ(compared, 36);
+    EXPECT_EQ(compared, 84);
 }
 
 TEST(AreaTables, DistancesBetweenBinsInterpolate) {

@@ -197,9 +197,20 @@ TEST(FuzzFindings, EnvironmentTexelBeyondTheLimitIsRefused) {
 // A header field of another type threw nlohmann's type_error, naming no file.
 TEST(FuzzFindings, ImpulseTableHeaderFieldsOfAnotherTypeNameTheField) {
     const fs::path p = temp_file("tables.bin");
-    const std::string good =
-        R"({"bins":256,"g_nodes":9,"g_range":0.6,"max_d":40.0,"min_d":0.001,"order":11,)"
-        R"("phase_terms":32,"shift_bins":8,"version":3)";
+    // Every parameter field as this version writes it, the closing brace left off.
+    std::string good = nlohmann::json{{"bins", ZhDistanceTable::kBins},
+                                      {"g_nodes", kGNodes},
+                                      {"g_range", kGRange},
+                                      {"g_inner", kGInner},
+                                      {"g_panel_edges", kGPanelEdges},
+                                      {"max_d", ZhDistanceTable::kMaxD},
+                                      {"min_d", ZhDistanceTable::kMinD},
+                                      {"order", kImpulseOrder},
+                                      {"phase_terms", kPhaseTerms},
+                                      {"shift_bins", kShiftBins},
+                                      {"version", ImpulseTables::kFormatVersion}}
+                           .dump();
+    good.pop_back();
     const std::pair<std::string, std::string> cases[] = {
         {"[1, 2]", "header"},
         {good + R"(,"bounces":"30"})", "bounces"},

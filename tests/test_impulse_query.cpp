@@ -84,7 +84,9 @@ TEST(ImpulseQuery, OutOfDomainInputsNameTheFlag) {
     q.distance = std::nan("");
     EXPECT_EQ(field_of(q), "--distance");
     q = {};
-    q.medium.g = 0.7;
+    q.medium.g = 0.9;  // within the tables' range since they carry HG beyond |g| = 0.6
+    EXPECT_EQ(field_of(q), "none");
+    q.medium.g = 0.96;
     EXPECT_EQ(field_of(q), "--g");
     q = {};
     q.shift = 1.5;

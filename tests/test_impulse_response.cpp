@@ -66,8 +66,11 @@ TEST(PointImpulse, SingleScatteringMatchesBruteForce) {
     struct Config {
         double sigma_s, sigma_a, g, d;
     };
-    const Config configs[] = {{1.0, 0.0, 0.0, 0.3}, {1.0, 0.0, 0.0, 2.0},  {0.5, 0.2, 0.0, 1.5},
-                              {1.0, 0.0, 0.5, 1.0}, {2.0, 0.5, -0.5, 0.7}, {0.3, 0.0, 0.5, 4.0}};
+    // Up to the tables' |g| = 0.95: haze and fog scatter strongly forward.
+    const Config configs[] = {{1.0, 0.0, 0.0, 0.3},  {1.0, 0.0, 0.0, 2.0},  {0.5, 0.2, 0.0, 1.5},
+                              {1.0, 0.0, 0.5, 1.0},  {2.0, 0.5, -0.5, 0.7}, {0.3, 0.0, 0.5, 4.0},
+                              {0.5, 0.05, 0.9, 1.0}, {1.0, 0.0, 0.95, 0.4}, {0.3, 0.0, -0.8, 2.0},
+                              {0.2, 0.02, 0.95, 6.0}};
     for (const Config& c : configs) {
         const HomogeneousMedium m{c.sigma_s, c.sigma_a, c.g};
         const ZhVector z = point_single_zh(m, c.d);
@@ -94,7 +97,7 @@ TEST(PointImpulse, SigmaRemapMatchesDirectComputation) {
     const SingleScatterTable table(SingleScatterTable::Emitter::Point);
     for (double sigma_s : {0.1, 0.3, 3.0, 10.0})
         for (double sigma_a : {0.0, 0.1, 1.0})
-            for (double g : {-0.3, 0.2, 0.5})
+            for (double g : {-0.93, -0.7, -0.3, 0.2, 0.5, 0.75, 0.9, 0.95})
                 for (double d : {0.05, 0.4, 1.3}) {
                     const HomogeneousMedium m{sigma_s, sigma_a, g};
                     if (m.sigma_t() * d >= ZhDistanceTable::kMaxD) continue;
@@ -140,8 +143,10 @@ TEST(DirectionalImpulse, SingleScatteringMatchesBruteForce) {
     struct Config {
         double sigma_s, sigma_a, g, s;
     };
-    const Config configs[] = {{1.0, 0.0, 0.0, 0.2}, {1.0, 0.0, 0.0, 3.0},  {0.5, 0.5, 0.0, 1.0},
-                              {1.0, 0.0, 0.5, 0.7}, {2.0, 0.1, -0.5, 0.4}, {0.2, 0.0, 0.5, 5.0}};
+    const Config configs[] = {{1.0, 0.0, 0.0, 0.2},  {1.0, 0.0, 0.0, 3.0},  {0.5, 0.5, 0.0, 1.0},
+                              {1.0, 0.0, 0.5, 0.7},  {2.0, 0.1, -0.5, 0.4}, {0.2, 0.0, 0.5, 5.0},
+                              {0.5, 0.05, 0.9, 1.0}, {1.0, 0.0, 0.95, 0.3}, {0.3, 0.0, -0.8, 2.0},
+                              {1.0, 0.0, -0.95, 0.5}};
     for (const Config& c : configs) {
         const HomogeneousMedium m{c.sigma_s, c.sigma_a, c.g};
         const ZhVector z = directional_single_zh(m, c.s);
@@ -160,7 +165,7 @@ TEST(DirectionalImpulse, SigmaRemapMatchesDirectComputation) {
     const SingleScatterTable table(SingleScatterTable::Emitter::Directional);
     for (double sigma_s : {0.1, 0.3, 3.0, 10.0})
         for (double sigma_a : {0.0, 0.1, 1.0})
-            for (double g : {-0.3, 0.2, 0.5})
+            for (double g : {-0.93, -0.7, -0.3, 0.2, 0.5, 0.75, 0.9, 0.95})
                 for (double s : {0.05, 0.4, 1.3}) {
                     const HomogeneousMedium m{sigma_s, sigma_a, g};
                     if (m.sigma_t() * s >= ZhDistanceTable::kMaxD) continue;

@@ -117,7 +117,7 @@ void draw_tables_panel(TablesPanelState& s) {
     ImGui::Checkbox("surface variant (back-scatter shift)", &s.surface_variant);
     ImGui::SliderFloat("sigma_s", &s.sigma_s, 0.01f, 10.0f, "%.3g", ImGuiSliderFlags_Logarithmic);
     ImGui::SliderFloat("sigma_a", &s.sigma_a, 0.0f, 5.0f, "%.3g");
-    ImGui::SliderFloat("g", &s.g, -0.6f, 0.6f, "%.2f");
+    ImGui::SliderFloat("g", &s.g, -float(kGRange), float(kGRange), "%.2f");
     ImGui::SliderInt("bounces", &s.bounces, 1, kTableBounces);
     ImGui::SliderFloat("lobe at d", &s.lobe_distance, 0.01f, 10.0f, "%.3g",
                        ImGuiSliderFlags_Logarithmic);

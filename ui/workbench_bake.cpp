@@ -173,7 +173,14 @@ void draw_bake_panel(Workbench::State& s) {
                                           ImGuiSliderFlags_Logarithmic);
             changed |= ImGui::SliderFloat("sigma_a", &sigma_a, 0.0f, 5.0f, "%.3f",
                                           ImGuiSliderFlags_Logarithmic);
-            changed |= ImGui::SliderFloat("g", &g, -0.95f, 0.95f, "%.2f");
+            // The impulse tables' range: a bake refuses more (BakeEstimator::check_media).
+            changed |= ImGui::SliderFloat("g", &g, -float(kGRange), float(kGRange), "%.2f");
+            if (ImGui::IsItemHovered())
+                ImGui::SetTooltip(
+                    "Henyey-Greenstein anisotropy. |g| <= %.2f: method B's impulse "
+                    "tables end there (HG is singular at |g| = 1); a scene file may "
+                    "give VPT any |g| < 1.",
+                    kGRange);
             changed |= ImGui::SliderFloat("density scale", &scale, 0.0f, 10.0f, "%.2f",
                                           ImGuiSliderFlags_Logarithmic);
             if (changed) {

@@ -16,9 +16,9 @@ constexpr int kHalfAzimuths = 32;
 
 // HG at every g node with the per-node constants hoisted out of the ray loop.
 struct HgNodeConstants {
-    double scale[kGNodes], a[kGNodes], b[kGNodes];
+    double scale[kGNodeCount], a[kGNodeCount], b[kGNodeCount];
     HgNodeConstants() {
-        for (int j = 0; j < kGNodes; ++j) {
+        for (int j = 0; j < kGNodeCount; ++j) {
             const double g = g_node(j);
             scale[j] = (1.0 - g * g) / (4.0 * kPiD);
             a[j] = 1.0 + g * g;
@@ -27,7 +27,7 @@ struct HgNodeConstants {
     }
 };
 
-using RadianceBlock = std::array<std::array<double, kGNodes>, kShiftBins>;
+using RadianceBlock = std::array<std::array<double, kGNodeCount>, kShiftBins>;
 
 // Single-scattered radiance x sin(theta) arriving from direction w (canonical medium, I0 = 1),
 // for every shift bin and g node: one ray integral shared by all of them.
@@ -50,15 +50,15 @@ void radiance_times_sin(double D, const glm::dvec3& w, double theta, const HgNod
             const double c = -glm::dot(u, w);                        // scattering cosine
             // Equi-angular along the ray: dt / r^2 = dphi / h; times sin(theta) = 1 / D.
             const double common = wr[e] * half / D * std::exp(-(t + r));
-            double phase[kGNodes];
-            for (int j = 0; j < kGNodes; ++j) {
+            double phase[kGNodeCount];
+            for (int j = 0; j < kGNodeCount; ++j) {
                 const double x = hg.a[j] - hg.b[j] * c;
                 phase[j] = hg.scale[j] / (x * std::sqrt(x));
             }
             for (int s = 0; s < kShiftBins; ++s) {
                 const double emission = glm::dot(normals[s], u);
                 if (emission <= 0) continue;
-                for (int j = 0; j < kGNodes; ++j)
+                for (int j = 0; j < kGNodeCount; ++j)
                     out[size_t(s)][size_t(j)] += common * emission * phase[j];
             }
         }
@@ -73,7 +73,7 @@ void integrate(double D, PolarRule rule, const glm::dvec3* normals, const glm::d
     RadianceBlock radiance;
     double y[kAreaShCount], p[kImpulseOrder], norm[kImpulseOrder];
     for (int l = 0; l < kImpulseOrder; ++l) norm[l] = std::sqrt((2.0 * l + 1.0) / (4.0 * kPiD));
-    const int iso = kGNodes / 2;
+    const int iso = kGIsotropicNode;
     for (const PolarNode& node : graded_polar_nodes(rule)) {
         const double st = std::sin(node.theta), ct = std::cos(node.theta);
         for (int k = 0; k < kHalfAzimuths; ++k) {
@@ -91,7 +91,7 @@ void integrate(double D, PolarRule rule, const glm::dvec3* normals, const glm::d
             if (zh)
                 for (int s = 0; s < kShiftBins; ++s) {
                     legendre(kImpulseOrder, glm::dot(w, axes[s]), p);
-                    for (int j = 0; j < kGNodes; ++j) {
+                    for (int j = 0; j < kGNodeCount; ++j) {
                         const double v = weight * radiance[size_t(s)][size_t(j)];
                         ZhVector& out = (*zh)[size_t(s)][size_t(j)];
                         for (int l = 0; l < kImpulseOrder; ++l)
@@ -126,7 +126,7 @@ AreaTableRow area_single_row(double D) {
     integrate(D, PolarRule::Fine, normals, axes, &row.zh, nullptr);
     integrate(D, PolarRule::Coarse, normals, axes, &coarse, nullptr);
     for (int s = 0; s < kShiftBins; ++s)
-        for (int j = 0; j < kGNodes; ++j)
+        for (int j = 0; j < kGNodeCount; ++j)
             for (int l = 0; l < kImpulseOrder; ++l)
                 row.error[size_t(s)] = std::max(row.error[size_t(s)],
                                                 std::fabs(row.zh[size_t(s)][size_t(j)][size_t(l)] -
@@ -147,7 +147,7 @@ AreaSingleScatterTable::AreaSingleScatterTable(std::vector<AreaTableRow> rows)
 }
 
 void AreaSingleScatterTable::pack() {
-    const size_t block = size_t(kShiftBins) * kGNodes * kImpulseOrder;
+    const size_t block = size_t(kShiftBins) * kGNodeCount * kImpulseOrder;
     packed_.assign(rows_.size() * block, 0.0f);
     tilt_.assign(rows_.size() * kShiftBins, 0.0);
     for (size_t i = 0; i < rows_.size(); ++i) {
@@ -157,7 +157,7 @@ void AreaSingleScatterTable::pack() {
         const double inv_trend = D * std::exp(D);
         float* out = &packed_[i * block];
         for (int s = 0; s < kShiftBins; ++s)
-            for (int j = 0; j < kGNodes; ++j)
+            for (int j = 0; j < kGNodeCount; ++j)
                 for (int l = 0; l < kImpulseOrder; ++l)
                     *out++ = float(rows_[i].zh[size_t(s)][size_t(j)][size_t(l)] * inv_trend);
     }
@@ -174,15 +174,19 @@ TiltedZh AreaSingleScatterTable::single(const HomogeneousMedium& m, double dista
     const double fs = u - s0;
     double gw[kGNodes];
     g_node_weights(m.g, gw);
-    // Distance and shift weights first, over whole contiguous node blocks (vectorises), then g.
+    // Distance and shift weights first, over the contiguous block of g's panel (vectorises),
+    // then g.
     constexpr int kNodeBlock = kGNodes * kImpulseOrder;
-    const size_t block = size_t(kShiftBins) * kNodeBlock;
+    const size_t shift_block = size_t(kGNodeCount) * kImpulseOrder;
+    const size_t block = size_t(kShiftBins) * shift_block;
+    const size_t panel = size_t(g_panel(m.g)) * kNodeBlock;
     float acc[kNodeBlock] = {};  // 8 terms of float data: float sums lose nothing that matters
     for (int k = 0; k < 4; ++k)
         for (int ds = 0; ds < 2; ++ds) {
             const double ws = st.weight[k] * (ds ? fs : 1.0 - fs);
             if (ws == 0.0) continue;
-            const float* base = &packed_[size_t(st.bin[k]) * block + size_t(s0 + ds) * kNodeBlock];
+            const float* base =
+                &packed_[size_t(st.bin[k]) * block + size_t(s0 + ds) * shift_block + panel];
             const float wsf = float(ws);
             for (int x = 0; x < kNodeBlock; ++x) acc[x] += wsf * base[x];
             r.tilt += ws * tilt_[size_t(st.bin[k]) * kShiftBins + size_t(s0 + ds)];
@@ -199,7 +203,7 @@ double AreaSingleScatterTable::worst_relative_error() const {
     double worst = 0.0;
     for (const AreaTableRow& row : rows_)
         for (int s = 0; s < kShiftBins; ++s) {
-            const double dc = std::fabs(row.zh[size_t(s)][kGNodes / 2][0]);
+            const double dc = std::fabs(row.zh[size_t(s)][kGIsotropicNode][0]);
             if (dc > 0) worst = std::max(worst, row.error[size_t(s)] / dc);
         }
     return worst;

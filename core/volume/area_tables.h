@@ -10,7 +10,7 @@
 // |           | linear interpolation between them (the seed's "shift distance" d = sin theta)  |
 // | axis      | cos(tilt) l + sin(tilt) t, l towards the emitter, t the unit tangential part of  |
 // |           | the emitter's normal (n - (n . l) l); tilt is fitted at g = 0                   |
-// | g         | the kGNodes Chebyshev nodes of volume/impulse_response.h, projected on that axis |
+// | g         | the kGNodeCount panel nodes of volume/impulse_response.h, projected on that axis|
 // | quadrature| graded polar rule x 32 azimuths over half the circle (the response is mirror-  |
 // |           | symmetric about the plane of l and n) x 96 equi-angular points per ray          |
 // | remap     | as for point emitters: sigma_s sigma_t x canonical at D = sigma_t d (tested)     |

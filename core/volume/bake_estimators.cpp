@@ -1,5 +1,7 @@
 #include "volume/bake_estimators.h"
 
+#include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "base/error.h"
@@ -76,6 +78,22 @@ BakeEstimator::BakeEstimator(const RayScene& scene, const Media& media, const Im
     attenuates_ = method != BakeMethod::Surface && !media.empty();
     scatters_ = method == BakeMethod::Impulse && !media.empty();
     zh_clamped_cosine(kImpulseOrder, cosine_zh_);
+    check_media();
+}
+
+void BakeEstimator::check_media() const {
+    if (!scatters_) return;
+    for (size_t i = 0; i < media_.size(); ++i) {
+        const MediumDesc& d = media_.desc(i);
+        if (!(std::fabs(d.g) <= kGRange)) {
+            char text[200];
+            std::snprintf(text, sizeof text,
+                          "g = %.4g: method B's impulse tables cover |g| <= %.2f (HG's response "
+                          "is singular at |g| = 1); bake with --method vpt or lower |g|",
+                          d.g, kGRange);
+            throw Error("", "media[" + std::to_string(i) + "].g (" + d.name + ")", text);
+        }
+    }
 }
 
 bool BakeEstimator::texel_walk() const {
@@ -194,8 +212,9 @@ void BakeEstimator::add_scattered(EmitterKind kind, const vec3& intensity, const
     // lookup serves every mode and the two ends are exactly off and on.
     const double query_optical =
         std::max(optical_distance - w_surface * kBackScatterShift, ZhDistanceTable::kMinD);
-    // The tables cover |g| <= kGRange; stronger anisotropy is clamped (stated in the header).
-    const double g = std::clamp(optics.tau_gs / optics.tau_s, -kGRange, kGRange);
+    // Within the tables' range: check_media() refused every medium beyond it, and a segment's
+    // g is a mean of its media's.
+    const double g = optics.tau_gs / optics.tau_s;
     int last_bounce = std::min(settings_.media_bounces, table_bounces_);
     if (last_bounce_cap > 0) last_bounce = std::min(last_bounce, last_bounce_cap);
     const double shift_q = std::clamp(shift, 0.0, 1.0);
@@ -613,7 +632,6 @@ vec3 BakeEstimator::area_response_rescattered(const vec3& intensity, const vec3&
     const float c = glm::dot(emitter_normal, l);
     q.shift = std::clamp(double(std::sqrt(std::max(0.0f, 1.0f - c * c))), 0.0, 1.0);
     q.medium = optics.effective();
-    q.medium.g = std::clamp(q.medium.g, -kGRange, kGRange);
     // One scattering event more at x: the response's orders up to media_bounces - 1.
     q.last_bounce = std::clamp(settings_.media_bounces - 1, 1, table_bounces_);
     q.collapsed = true;
@@ -650,7 +668,7 @@ vec3 BakeEstimator::single_correction(const EmitterSample& s, const vec3& p, con
     HomogeneousMedium model =
         optics.tau_s > 0.0 ? optics.effective() : HomogeneousMedium{0.0, 0.0, 0.0};
     if (model.sigma_t() * depth > ZhDistanceTable::kMaxD) model = HomogeneousMedium{0.0, 0.0, 0.0};
-    const double g_model = std::clamp(model.g, -kGRange, kGRange);
+    const double g_model = model.g;
     const MediumPoint m = draw_medium_point(p, n, nullptr, rng, counters);
     if (glm::length(m.w) == 0.0f) return vec3(0.0f);  // a grazing direction: measure zero
     const double wl = glm::dot(m.w, s.dir);
@@ -703,7 +721,7 @@ vec3 BakeEstimator::local_single_correction(const EmitterSample& s, const vec3& 
     if (model.sigma_t() * s.distance > ZhDistanceTable::kMaxD)
         model = HomogeneousMedium{0.0, 0.0, 0.0};
     const double st = model.sigma_t();
-    const double g_model = std::clamp(model.g, -kGRange, kGRange);
+    const double g_model = model.g;
     if (!(m.pdf > 0.0) || !std::isfinite(m.t)) return vec3(0.0f);
     const glm::dvec3 to = glm::dvec3(emitter) - glm::dvec3(m.x);
     const double r = glm::length(to);

@@ -92,6 +92,9 @@ class BakeEstimator {
     // `tables` is needed by Impulse only (may be null otherwise).
     BakeEstimator(const RayScene& scene, const Media& media, const ImpulseTables* tables,
                   BakeMethod method, const BakeSettings& settings);
+    // Impulse: every medium's g within the tables' |g| <= kGRange, or an Error naming
+    // media[i].g (run by the constructor and by every bake pass: sliders change media).
+    void check_media() const;
     // Impulse: path vertices deeper than bake.lit_medium_depth read the texels' Monte Carlo
     // terms from `field` (volume/vertex_corrections.h; null: the tables alone). Not owned.
     void set_vertex_corrections(const VertexCorrectionField* field) { corrections_ = field; }

@@ -8,6 +8,7 @@
 #include <tbb/parallel_for.h>
 #include <boost/math/quadrature/gauss.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace freqlab {
@@ -38,6 +39,26 @@ struct LegendrePhaseBasis {
             p0 = p1;
             p1 = p2;
             out[k] = (2.0 * k + 1.0) / (4.0 * kPiD) * p2;
+        }
+    }
+};
+// A single-scattering table's columns: the Legendre basis, then HG at every g node.
+struct SingleTableColumns {
+    static constexpr int count = kSingleColumns;
+    double scale[kGNodeCount], a[kGNodeCount], b[kGNodeCount];
+    SingleTableColumns() {
+        for (int j = 0; j < kGNodeCount; ++j) {
+            const double g = g_node(j);
+            scale[j] = (1.0 - g * g) / (4.0 * kPiD);
+            a[j] = 1.0 + g * g;
+            b[j] = 2.0 * g;
+        }
+    }
+    void eval(double c, double* out) const {
+        LegendrePhaseBasis{}.eval(c, out);
+        for (int j = 0; j < kGNodeCount; ++j) {
+            const double x = a[j] - b[j] * c;
+            out[kPhaseTerms + j] = scale[j] / (x * std::sqrt(x));
         }
     }
 };
@@ -134,19 +155,26 @@ ZhVector point_single_zh(const HomogeneousMedium& m, double d) {
 }
 
 double g_node(int j) {
-    return kGRange * std::cos((2.0 * j + 1.0) * kPiD / (2.0 * kGNodes));
+    const int panel = j / kGNodes, k = j % kGNodes;
+    const double a = kGPanelEdges[size_t(panel)], b = kGPanelEdges[size_t(panel) + 1];
+    return 0.5 * (a + b) + 0.5 * (b - a) * std::cos((2.0 * k + 1.0) * kPiD / (2.0 * kGNodes));
+}
+
+int g_panel(double g) {
+    int panel = 0;
+    while (panel + 1 < kGPanels && g > kGPanelEdges[size_t(panel) + 1]) ++panel;
+    return panel;
 }
 
 namespace {
 
-// Nodes and barycentric weights (Chebyshev, first kind: (-1)^j sin(theta_j)), computed once.
+// Barycentric weights of Chebyshev nodes (first kind): (-1)^k sin(theta_k), the same on every
+// panel (an affine map of the nodes scales them all alike).
 struct GNodeConstants {
-    double node[kGNodes], weight[kGNodes];
+    double weight[kGNodes];
     GNodeConstants() {
-        for (int j = 0; j < kGNodes; ++j) {
-            node[j] = g_node(j);
-            weight[j] = (j % 2 ? -1.0 : 1.0) * std::sin((2.0 * j + 1.0) * kPiD / (2.0 * kGNodes));
-        }
+        for (int k = 0; k < kGNodes; ++k)
+            weight[k] = (k % 2 ? -1.0 : 1.0) * std::sin((2.0 * k + 1.0) * kPiD / (2.0 * kGNodes));
     }
 };
 
@@ -154,22 +182,29 @@ struct GNodeConstants {
 
 void g_node_weights(double g, double* weights) {
     static const GNodeConstants c;
+    const int first = g_panel(g) * kGNodes;
     double sum = 0.0;
-    for (int j = 0; j < kGNodes; ++j) {
-        const double diff = g - c.node[j];
+    for (int k = 0; k < kGNodes; ++k) {
+        const double diff = g - g_node(first + k);
         if (diff == 0.0) {
-            for (int i = 0; i < kGNodes; ++i) weights[i] = i == j ? 1.0 : 0.0;
+            for (int i = 0; i < kGNodes; ++i) weights[i] = i == k ? 1.0 : 0.0;
             return;
         }
-        weights[j] = c.weight[j] / diff;
-        sum += weights[j];
+        weights[k] = c.weight[k] / diff;
+        sum += weights[k];
     }
-    for (int j = 0; j < kGNodes; ++j) weights[j] /= sum;
+    for (int k = 0; k < kGNodes; ++k) weights[k] /= sum;
 }
 
 PhaseResponses point_single_basis(double optical_distance, PolarRule rule) {
     PhaseResponses r;
     point_single(1.0, 1.0, optical_distance, LegendrePhaseBasis{}, r.data(), rule);
+    return r;
+}
+
+SingleColumns point_single_columns(double optical_distance, PolarRule rule) {
+    SingleColumns r;
+    point_single(1.0, 1.0, optical_distance, SingleTableColumns{}, r.data(), rule);
     return r;
 }
 
@@ -186,6 +221,12 @@ ZhVector directional_single_zh(const HomogeneousMedium& m, double s) {
 PhaseResponses directional_single_basis(double optical_distance, bool coarse) {
     PhaseResponses r;
     directional_single(1.0, 1.0, optical_distance, LegendrePhaseBasis{}, r.data(), coarse);
+    return r;
+}
+
+SingleColumns directional_single_columns(double optical_distance, bool coarse) {
+    SingleColumns r;
+    directional_single(1.0, 1.0, optical_distance, SingleTableColumns{}, r.data(), coarse);
     return r;
 }
 
@@ -253,22 +294,22 @@ SingleScatterTable::SingleScatterTable(Emitter emitter) : emitter_(emitter) {
                                              : ZhDistanceTable::Trend::DirectionalLike;
     // One quadrature pass per distance gives every phase term's response; a coarse pass beside
     // it gives the entry's error estimate.
-    std::vector<PhaseResponses> responses(ZhDistanceTable::kBins);
+    std::vector<SingleColumns> responses(ZhDistanceTable::kBins);
     error_.assign(ZhDistanceTable::kBins, 0.0);
     tbb::parallel_for(0, ZhDistanceTable::kBins, [&](int i) {
         const double D = ZhDistanceTable::distance_of_bin(i);
         const bool point = emitter == Emitter::Point;
-        responses[size_t(i)] = point ? point_single_basis(D) : directional_single_basis(D);
-        const PhaseResponses coarse =
-            point ? point_single_basis(D, PolarRule::Coarse) : directional_single_basis(D, true);
-        for (int j = 0; j < kPhaseTerms; ++j)
+        responses[size_t(i)] = point ? point_single_columns(D) : directional_single_columns(D);
+        const SingleColumns coarse = point ? point_single_columns(D, PolarRule::Coarse)
+                                           : directional_single_columns(D, true);
+        for (int j = 0; j < kSingleColumns; ++j)
             for (int l = 0; l < kImpulseOrder; ++l)
                 error_[size_t(i)] = std::max(error_[size_t(i)],
                                              std::fabs(responses[size_t(i)][size_t(j)][size_t(l)] -
                                                        coarse[size_t(j)][size_t(l)]));
     });
-    terms_.reserve(kPhaseTerms);
-    for (int j = 0; j < kPhaseTerms; ++j) {
+    terms_.reserve(kSingleColumns);
+    for (int j = 0; j < kSingleColumns; ++j) {
         std::vector<ZhVector> column(ZhDistanceTable::kBins);
         for (int i = 0; i < ZhDistanceTable::kBins; ++i)
             column[size_t(i)] = responses[size_t(i)][size_t(j)];
@@ -319,35 +360,50 @@ ZhVector SingleScatterTable::single(const HomogeneousMedium& m, double distance,
                                              : ZhDistanceTable::Trend::DirectionalLike;
     const ZhDistanceTable::Stencil st = ZhDistanceTable::stencil(trend, m.sigma_t() * distance);
     if (!st.valid) return z;
-    // HG = sum_k g^k b_k: the response is the same sum of the basis responses; terms below
-    // |g|^k = 1e-10 are skipped (12 terms at |g| = 0.15, 32 at |g| = 0.5). The sum over terms
-    // is collapsed once per g (quantised to 2^-20) and memoised per thread (collapse_memo.h).
+    // |g| <= kGInner: HG = sum_k g^k b_k, so the response is the same sum of the basis
+    // responses; terms below |g|^k = 1e-10 are skipped (12 terms at |g| = 0.15, 32 at 0.5).
+    // Beyond: barycentric interpolation between HG's responses at the g nodes of g's panel.
+    // The sum over columns is collapsed once per g (quantised to 2^-20) and memoised per thread
+    // (collapse_memo.h).
     const size_t nt = terms_.size();
+    auto column_weights = [&](double g, double* w) {
+        std::fill(w, w + nt, 0.0);
+        if (std::fabs(g) <= kGInner) {
+            double gk = 1.0;
+            for (size_t j = 0; j < size_t(kPhaseTerms) && std::fabs(gk) > 1e-10; ++j, gk *= g)
+                w[j] = gk;
+        } else {
+            g_node_weights(g, w + kPhaseTerms + g_panel(g) * kGNodes);
+        }
+    };
+    double w[kSingleColumns];
     const double gq = std::round(m.g * 1048576.0) / 1048576.0;
     const std::vector<double>* collapsed =
         !collapse
             ? nullptr
             : CollapseMemo::get(memo_id_, uint64_t(int64_t(gq * 1048576.0) + (1ll << 40)), [&] {
+                  double wq[kSingleColumns];
+                  column_weights(gq, wq);
                   std::vector<double> c(size_t(ZhDistanceTable::kBins) * kImpulseOrder, 0.0);
-                  for (size_t b = 0; b < size_t(ZhDistanceTable::kBins); ++b) {
-                      double gk = 1.0;
-                      for (size_t j = 0; j < nt && std::fabs(gk) > 1e-10; ++j, gk *= gq)
-                          for (int l = 0; l < kImpulseOrder; ++l)
-                              c[b * kImpulseOrder + size_t(l)] +=
-                                  gk * packed_[(b * nt + j) * kImpulseOrder + size_t(l)];
-                  }
+                  for (size_t b = 0; b < size_t(ZhDistanceTable::kBins); ++b)
+                      for (size_t j = 0; j < nt; ++j)
+                          if (wq[j] != 0.0)
+                              for (int l = 0; l < kImpulseOrder; ++l)
+                                  c[b * kImpulseOrder + size_t(l)] +=
+                                      wq[j] * packed_[(b * nt + j) * kImpulseOrder + size_t(l)];
                   return c;
               });
     if (collapsed) {
         ZhDistanceTable::interpolate_rows(st, collapsed->data(), z.data());
     } else {
-        double gk = 1.0;
-        for (size_t j = 0; j < nt && std::fabs(gk) > 1e-10; ++j, gk *= m.g)
-            for (int k = 0; k < 4; ++k) {
-                const double w = gk * st.weight[k];
-                const double* row = &packed_[(size_t(st.bin[k]) * nt + j) * kImpulseOrder];
-                for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += w * row[l];
-            }
+        column_weights(m.g, w);
+        for (size_t j = 0; j < nt; ++j)
+            if (w[j] != 0.0)
+                for (int k = 0; k < 4; ++k) {
+                    const double wk = w[j] * st.weight[k];
+                    const double* row = &packed_[(size_t(st.bin[k]) * nt + j) * kImpulseOrder];
+                    for (int l = 0; l < kImpulseOrder; ++l) z[size_t(l)] += wk * row[l];
+                }
     }
     // Optical-distance substitution (see the header): the factors were derived, then tested.
     const double factor =

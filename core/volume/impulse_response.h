@@ -56,17 +56,36 @@ using PhaseResponses = std::array<ZhVector, kPhaseTerms>;
 PhaseResponses point_single_basis(double optical_distance, PolarRule rule = PolarRule::Fine);
 PhaseResponses directional_single_basis(double optical_distance, bool coarse = false);
 
-// Chebyshev nodes in g for tables where 32 basis terms would not fit (the area tables): as a
-// function of g the response is analytic inside |g| < 1 (HG's singularity, 1 + g^2 - 2 g c = 0,
-// has |g| = 1), so polynomial interpolation at kGNodes Chebyshev nodes of [-kGRange, kGRange]
-// converges like 3^-kGNodes. Measured: enough for point-like responses (0.5 % at g = -0.3, 0.2,
-// 0.5), not for the directional one, whose high orders carry g^l-like factors (1 % at l = 9, 10).
-constexpr int kGNodes = 9;
-constexpr double kGRange = 0.6;
-double g_node(int j);  // kGRange cos((2j + 1) pi / (2 kGNodes)); j = kGNodes / 2 is g = 0
-// Barycentric interpolation weights at g (they sum to 1).
+// Chebyshev nodes in g, panel by panel, for what 32 basis terms cannot carry: the area tables
+// everywhere, and every table beyond |g| = kGInner (HG's Legendre series converges like g^k:
+// 0.9^32 = 0.03). As a function of g the response is analytic inside |g| < 1 (HG's
+// singularity, 1 + g^2 - 2 g c = 0, has |g| = 1), so polynomial interpolation at kGNodes
+// Chebyshev nodes of a panel [a, b] converges like rho^-kGNodes, rho = s + sqrt(s^2 - 1),
+// s = (1 - c) / h the singularity's distance from the panel's centre c in half-widths h. The
+// panels are cut so that every one has rho >= 3 (the central [-0.6, 0.6]: s = 5/3, rho = 3;
+// [0.6, 0.9]: s = 5/3; [0.9, 0.95]: s = 3, rho = 5.8). Measured on the central panel: 0.5 %
+// for point-like responses at g = -0.3, 0.2, 0.5, 1 % at l = 9, 10 for the directional one.
+// |g| > kGRange is refused where a method-B bake starts (impulse_query.h: check_table_g).
+constexpr int kGNodes = 9;  // per panel
+constexpr int kGPanels = 5;
+constexpr double kGInner = 0.6;   // the Legendre basis's range (point, directional)
+constexpr double kGRange = 0.95;  // the tables' range
+constexpr std::array<double, kGPanels + 1> kGPanelEdges = {-0.95, -0.9, -0.6, 0.6, 0.9, 0.95};
+constexpr int kGNodeCount = kGPanels * kGNodes;
+constexpr int kGIsotropicNode = (kGPanels / 2) * kGNodes + kGNodes / 2;  // g = 0 exactly
+double g_node(int j);  // node j of all panels: panel j / kGNodes, Chebyshev node j % kGNodes
+// The panel whose nodes interpolate at g (outside [-kGRange, kGRange]: the end panel).
+int g_panel(double g);
+// Barycentric interpolation weights at g for the kGNodes nodes of g_panel(g) (they sum to 1).
 void g_node_weights(double g, double* weights);
-using GNodeResponses = std::array<ZhVector, kGNodes>;
+using GNodeResponses = std::array<ZhVector, kGNodeCount>;
+
+// A single-scattering table's columns at one distance: the kPhaseTerms Legendre responses,
+// then HG's response at each of the kGNodeCount g nodes (one quadrature pass gives all).
+constexpr int kSingleColumns = kPhaseTerms + kGNodeCount;
+using SingleColumns = std::array<ZhVector, kSingleColumns>;
+SingleColumns point_single_columns(double optical_distance, PolarRule rule = PolarRule::Fine);
+SingleColumns directional_single_columns(double optical_distance, bool coarse = false);
 
 // ZH vectors over optical distances D in [kMinD, kMaxD], 256 log-spaced bins, Catmull-Rom
 // interpolated in log D after removing the e^{-D} (and, for point emitters, 1/D) trends.
@@ -113,13 +132,15 @@ class ZhDistanceTable {
     std::vector<ZhVector> scaled_;
 };
 
-// Single scattering of one emitter type for any medium and any |g| <= 0.6.
+// Single scattering of one emitter type for any medium and any |g| <= kGRange: the Legendre
+// basis's kPhaseTerms responses for |g| <= kGInner, HG's own responses at the g nodes beyond.
 class SingleScatterTable {
   public:
     enum class Emitter { Point, Directional };
     explicit SingleScatterTable(Emitter emitter);  // tabulates (~0.3 s on 2 cores)
-    // From saved values: terms[k][bin] is the canonical response to phase basis term k; error[bin]
-    // the entry's estimated quadrature error (max over terms and orders, canonical units).
+    // From saved values: terms[k][bin] is the canonical response of column k (SingleColumns);
+    // error[bin] the entry's estimated quadrature error (max over columns and orders, canonical
+    // units).
     SingleScatterTable(Emitter emitter, const std::vector<std::vector<ZhVector>>& terms,
                        std::vector<double> error);
     std::vector<std::vector<ZhVector>> canonical_terms() const;
@@ -137,8 +158,8 @@ class SingleScatterTable {
   private:
     void pack();
     Emitter emitter_;
-    std::vector<ZhDistanceTable> terms_;  // one per phase basis term
-    std::vector<double> packed_;          // [bin][term][l] scaled values: one query reads 4 blocks
+    std::vector<ZhDistanceTable> terms_;  // one per column (SingleColumns)
+    std::vector<double> packed_;          // [bin][column][l] scaled values: a query reads 4 blocks
     uint64_t memo_id_ = CollapseMemo::next_owner_id();  // collapsed-over-g memo (single())
     std::vector<double> error_;                         // [bin]
 };

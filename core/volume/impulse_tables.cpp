@@ -35,7 +35,7 @@ ZhVector take(const float*& p) {
 
 size_t payload_floats(int bounces) {
     const size_t bins = ZhDistanceTable::kBins, order = kImpulseOrder;
-    return 2 * (kPhaseTerms * bins * order + bins) + bins * kShiftBins * 2 +
+    return 2 * (kSingleColumns * bins * order + bins) + bins * kShiftBins * 2 +
            size_t(bounces) * bins * order + size_t(bounces + 1) * bins +
            2 * size_t(bounces) * bins * order;
 }
@@ -43,7 +43,7 @@ size_t payload_floats(int bounces) {
 // The area responses are stored as IEEE half floats (Imath): relative rounding 2.4e-4, 20x
 // below the 0.5 % the remaps are held to, and the file stays under 2 MB.
 size_t payload_halves() {
-    return size_t(ZhDistanceTable::kBins) * kShiftBins * kGNodes * kImpulseOrder;
+    return size_t(ZhDistanceTable::kBins) * kShiftBins * kGNodeCount * kImpulseOrder;
 }
 
 }  // namespace
@@ -104,6 +104,8 @@ void ImpulseTables::save(const fs::path& path) const {
                          {"phase_terms", kPhaseTerms},
                          {"g_nodes", kGNodes},
                          {"g_range", kGRange},
+                         {"g_inner", kGInner},
+                         {"g_panel_edges", kGPanelEdges},
                          {"shift_bins", kShiftBins},
                          {"bounces", bounces},
                          {"payload_floats", payload.size()},
@@ -147,6 +149,12 @@ ImpulseTables ImpulseTables::load(const fs::path& path) {
     expect("phase_terms", kPhaseTerms);
     expect("g_nodes", kGNodes);
     expect("g_range", kGRange);
+    expect("g_inner", kGInner);
+    if (!h.contains("g_panel_edges") || h["g_panel_edges"] != json(kGPanelEdges))
+        throw Error(file, "g_panel_edges",
+                    "expected " + json(kGPanelEdges).dump() + ", got " +
+                        (h.contains("g_panel_edges") ? h["g_panel_edges"].dump() : "nothing") +
+                        " (tables from another freqlab version: regenerate with `freqlab tables`)");
     expect("shift_bins", kShiftBins);
     const long long bounces_field = integer("bounces");
     if (bounces_field < 1 || bounces_field > 1000)
@@ -186,7 +194,7 @@ ImpulseTables ImpulseTables::load(const fs::path& path) {
     const float* p = payload.data();
     ImpulseTables t;
     for (int e = 0; e < 2; ++e) {
-        std::vector<std::vector<ZhVector>> terms(kPhaseTerms, std::vector<ZhVector>(bins));
+        std::vector<std::vector<ZhVector>> terms(kSingleColumns, std::vector<ZhVector>(bins));
         for (auto& column : terms)
             for (ZhVector& z : column) z = take(p);
         std::vector<double> error(bins);
@@ -260,7 +268,7 @@ ImpulseTables::Verification ImpulseTables::verify() const {
         return w;
     };
     for (double sigma_s : {0.2, 1.0, 4.0})
-        for (double g : {-0.4, 0.0, 0.3})
+        for (double g : {-0.92, -0.7, -0.4, 0.0, 0.3, 0.75, 0.9, 0.95})
             for (double d : {0.1, 0.7, 2.0}) {
                 const HomogeneousMedium m{sigma_s, 0.1, g};
                 v.worst_point = std::max(v.worst_point,

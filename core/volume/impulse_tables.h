@@ -3,10 +3,10 @@
 //
 // | part                         | size (floats)                                          |
 // |------------------------------|--------------------------------------------------------|
-// | point single scattering      | kPhaseTerms x kBins x kImpulseOrder + kBins error est. |
+// | point single scattering      | kSingleColumns x kBins x kImpulseOrder + kBins errors  |
 // | directional single scatter.  | the same                                               |
 // | area single scattering       | kBins x kShiftBins x (tilt, error estimate) and, as     |
-// |                              | half floats, kBins x kShiftBins x kGNodes x kImpulseOrder|
+// |                              | half floats, kBins x kShiftBins x kGNodeCount x order  |
 // | point multiple scattering    | bounces x kBins x kImpulseOrder + (bounces+1) x kBins  |
 // | directional multiple scatter.| bounces x kBins x kImpulseOrder                        |
 // | the same, receiver on the    | bounces x kBins x kImpulseOrder                        |
@@ -30,7 +30,7 @@ namespace freqlab {
 
 class ImpulseTables {
   public:
-    static constexpr int kFormatVersion = 3;
+    static constexpr int kFormatVersion = 4;
 
     static ImpulseTables build(int bounces, Progress* progress = nullptr);
     void save(const std::filesystem::path& path) const;            // atomic

@@ -107,6 +107,7 @@ void LightmapBaker::reset() {
 }
 
 void LightmapBaker::run_pass(int samples, Progress* progress) {
+    estimator_.check_media();  // the sliders may have moved g since the last pass
     const auto t0 = Clock::now();
     if (samples_ == 0 && !corrections_ &&
         uses_vertex_corrections(method_, settings_, tables_, media_)) {

@@ -33,7 +33,9 @@ std::vector<MuNode> directional_mu_nodes(double depth, int panels) {
     const auto& x = gauss<double, 12>::abscissa();
     const auto& w = gauss<double, 12>::weights();
     std::vector<double> edges;
-    for (int i = 0; i <= panels; ++i) edges.push_back(-1.0 + double(i) / panels);
+    // Graded towards mu = -1: HG's backward peak there is ~(1 - |g|)^2 / (2 |g|) wide (0.0013 at
+    // g = -0.95); uniform panels left the coarse rule 6.6 % off and the fine one unresolved.
+    for (int i = 0; i <= panels; ++i) edges.push_back(-1.0 + std::pow(double(i) / panels, 2.0));
     for (int i = 1; i <= panels; ++i)
         edges.push_back(1.0 - std::pow(1.0 - double(i) / panels, 2.0));
     const double first_graded = edges[size_t(panels) + 1];

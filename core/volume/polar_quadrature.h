@@ -20,7 +20,8 @@ const std::vector<PolarNode>& graded_polar_nodes(PolarRule rule = PolarRule::Fin
 
 // Nodes in mu = cos(theta) over [-1, 1] for directional emitters at optical depth `depth`
 // (weights for integrals d mu): split at mu = 0, where the path to the boundary, depth / mu,
-// jumps to infinity; uniform panels below, panels graded towards mu = 1 above, plus geometric
+// jumps to infinity; panels graded towards mu = -1 below and towards mu = 1 above (HG's backward
+// and forward peaks), plus geometric
 // panels at depth / 16, depth / 4, ... where the radiance rises over a range of mu ~ depth.
 struct MuNode {
     double mu;

@@ -53,7 +53,7 @@ BakeEstimator::ProbeParts BakeEstimator::estimate_probe(const vec3& p, CounterRn
         if (!(m.sigma_s > 0.0) || !std::isfinite(distance) || !(distance > 0.0) ||
             m.sigma_t() * distance > ZhDistanceTable::kMaxD)
             return;
-        const double g = std::clamp(m.g, -kGRange, kGRange);
+        const double g = m.g;  // within the tables' range (check_media)
         const int last_bounce = std::min(settings_.media_bounces, table_bounces_);
         const glm::dvec3 l(dir);
         if (const ImpulseIrradiance* table =
@@ -220,12 +220,6 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
         q.distance = std::isfinite(s.distance) ? s.distance : length;
         q.shift = s.shift;
         q.medium = m;
-        q.medium.g = std::clamp(m.g, -kGRange, kGRange);
-        // Say what the tables were queried at: beyond their range they answer for |g| = 0.6
-        // and only the Monte Carlo corrections (single_correction, the walks) see the real g.
-        if (q.medium.g != m.g)
-            line("  tables queried at g %.3f (their range is |g| <= %.1f), not the medium's %.3f",
-                 q.medium.g, kGRange, m.g);
         q.last_bounce = std::min(settings_.media_bounces, table_bounces_);
         q.receiver = Receiver::OnSurface;
         if (!(q.distance > 0.0) || m.sigma_t() * q.distance > ZhDistanceTable::kMaxD) continue;
