@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <optional>
 
 #include "base/error.h"
 #include "base/file_io.h"
@@ -24,6 +25,7 @@
 #include "render/frame_renderer.h"
 #include "scene/scene_loader.h"
 #include "settings_panel.h"
+#include "volume/bake_estimators.h"
 
 namespace freqlab::ui {
 
@@ -127,6 +129,40 @@ void apply_render_invalidation(Workbench::State& s, uint32_t flags) {
         s.view_dirty = true;
 }
 
+std::string current_method_name(const Workbench::State& s) {
+    return s.bake ? std::string(to_string(bake_method(s)))
+                  : render_method_info(s.config.method).name;
+}
+
+// Every method, render and bake, in one menu: render methods in id order, then the bakes.
+std::vector<std::string> all_method_names() {
+    std::vector<std::string> names = render_method_names();
+    for (const auto& [method, name] : kBakeMethodNames) names.push_back(name);
+    return names;
+}
+
+void draw_method_menu(Workbench::State& s) {
+    const std::vector<std::string> names = all_method_names();
+    const std::string current = current_method_name(s);
+    if (ImGui::BeginCombo("method", current.c_str())) {
+        for (const std::string& name : names) {
+            const bool bake = is_bake_method(name);
+            if (ImGui::Selectable((name + (bake ? " (bake)" : "")).c_str(), name == current) &&
+                name != current)
+                s.pending_method = name;
+        }
+        ImGui::EndCombo();
+    }
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip(
+            "Render methods (A): gbuffer: primary rays only; mis: MIS direct lighting at "
+            "mis.spp; reference: the same at reference.spp (cached on disk); points, sparse, "
+            "cache: method A's stages.\nBake methods (lightmaps and probes): surface: media "
+            "ignored; extinction: transmittance on every segment; impulse: plus the tables' "
+            "scattered light (method B); vpt: volumetric path tracing (the ground truth).\n"
+            "Switching keeps the settings chosen so far.");
+}
+
 void draw_settings_panel(Workbench::State& s) {
     ImGui::Text("scene: %s", s.scene.name.c_str());
     // What the loader changed in the input (dropped triangles, negative texels read as 0).
@@ -134,26 +170,20 @@ void draw_settings_panel(Workbench::State& s) {
     for (const std::string& note : s.scene.load_notes) ImGui::TextWrapped("note: %s", note.c_str());
     ImGui::PopStyleColor();
     if (s.bake) {
+        draw_method_menu(s);
         draw_bake_panel(s);
         draw_compare_panel(s);  // against a VPT bake (workbench_bake.cpp)
+        follow_bake_media(s);
+        draw_tables_panel(*s.tables);
         return;
     }
-    int method = int(s.config.method);
-    const std::string methods = render_method_list(std::string(1, '\0')) + '\0';
-    if (ImGui::Combo("method", &method, methods.c_str()) && method != int(s.config.method)) {
-        s.config.method = RenderMethod(method);
-        restart_renderer(s);
-    }
+    draw_method_menu(s);
     if (ImGui::Checkbox("view environment bandwidth", &s.show_env_bandwidth)) s.view_dirty = true;
     if (ImGui::IsItemHovered())
         ImGui::SetTooltip(
             "Method A's B_L hierarchy (cycles/rad) per window size over the lat-long "
             "map, in place of the frame; pick the level as a layer.");
     if (s.show_env_bandwidth) start_env_bandwidth_job(s);
-    if (ImGui::IsItemHovered())
-        ImGui::SetTooltip(
-            "gbuffer: primary rays only; mis: MIS direct lighting at mis.spp; "
-            "reference: the same at reference.spp (cached on disk)");
     SettingsGroup group = s.config.settings_group();
     apply_render_invalidation(s, draw_settings(group, !s.options.show_tables));
 
@@ -272,9 +302,50 @@ void Workbench::reset(const WorkbenchOptions& options, Scene* loaded) {
 }
 
 void Workbench::open_scene(const std::string& path) {
-    WorkbenchOptions o = s_->options;
-    o.scene = path;
-    reset(o);
+    State& s = *s_;
+    std::optional<Scene> scene;
+    try {
+        scene = load_scene(path);
+    } catch (const Error& e) {
+        s.error = e.what();  // the workbench stays as it was
+        return;
+    }
+    reopen(path, current_method_name(s), &*scene);
+}
+
+void Workbench::set_method(const std::string& name) {
+    if (name == method()) return;
+    if (s_->bake && is_bake_method(name)) return switch_bake_method(*s_, parse_bake_method(name));
+    if (!is_bake_method(name)) parse_render_method(name);  // throws naming --method
+    reopen(s_->options.scene, name, nullptr);
+}
+
+std::string Workbench::method() const {
+    return current_method_name(*s_);
+}
+
+void Workbench::reopen(const std::string& scene_path, const std::string& method, Scene* loaded) {
+    State& s = *s_;
+    // What the panels hold now (they edit s.config and the bake session, not s.options).
+    const nlohmann::json render_settings = s.config.settings_group().to_json();
+    std::optional<BakeSettings> bake_settings;
+    if (s.bake) bake_settings = bake_session_file(s).settings;
+    WorkbenchOptions o = s.options;
+    o.scene = scene_path;
+    o.method = method;
+    o.frame = s.frame;
+    o.settings.clear();
+    o.layer.clear();  // the new method's layers differ: colour
+    reset(o, loaded);
+    if (!s.error.empty()) return;
+    s.config.settings_group().from_json(render_settings, "workbench", "settings");
+    if (!s.bake) s.config.method = parse_render_method(method);
+    if (s.bake && bake_settings) {
+        BakeSessionFile f = bake_session_file(s);
+        f.settings = *bake_settings;
+        apply_bake_session(s, f);
+    }
+    restart_renderer(s);
 }
 
 Workbench::~Workbench() {
@@ -359,6 +430,12 @@ void Workbench::draw(int fb_w, int fb_h) {
     ImGui::Begin("Timeline", nullptr, fixed | ImGuiWindowFlags_NoTitleBar);
     draw_timeline(s);
     ImGui::End();
+
+    if (!s.pending_method.empty()) {
+        const std::string name = std::move(s.pending_method);
+        s.pending_method.clear();
+        set_method(name);
+    }
 }
 
 void Workbench::set_frame(int frame) {

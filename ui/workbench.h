@@ -84,8 +84,14 @@ class Workbench {
     void save_session(const std::string& path) const;
     void load_session(const std::string& path);   // throws Error naming file and field
     void reset(const WorkbenchOptions& options);  // reloads the scene; errors show in the UI
-    // Another scene, same method and settings (File > Open scene); errors show in the UI.
+    // Another scene with the method and settings chosen now, in the panels or by --set (File >
+    // Open scene); a scene that does not load is an error shown in the UI, the workbench as it
+    // was.
     void open_scene(const std::string& path);
+    // The method menu: a render method (gbuffer ... cache) or a bake method (surface ... vpt,
+    // which opens the bake session); the settings chosen so far are kept.
+    void set_method(const std::string& name);
+    std::string method() const;
 
     // Compare: render the reference of the shown frame in the background; when it arrives the
     // frame gains layers reference, error, relative_error and metrics() answers.
@@ -108,6 +114,8 @@ class Workbench {
   private:
     // reset() with the scene already loaded from options.scene (moved from; null: load it).
     void reset(const WorkbenchOptions& options, Scene* loaded);
+    // reset() onto `scene_path` with `method`, keeping the settings the panels hold now.
+    void reopen(const std::string& scene_path, const std::string& method, Scene* loaded);
     std::unique_ptr<State> s_;
 };
 

@@ -147,19 +147,6 @@ void draw_bake_panel(Workbench::State& s) {
         if (!snap.error.empty()) s.error = snap.error;
     }
     bool restart = false;
-    int method = int(b.method);
-    const std::string methods = bake_method_list(std::string(1, '\0')) + '\0';
-    if (ImGui::Combo("bake method", &method, methods.c_str()) && method != int(b.method)) {
-        stop_bake_jobs(s);
-        b.method = BakeMethod(method);
-        b.baker_dirty = true;
-        restart = true;
-    }
-    if (ImGui::IsItemHovered())
-        ImGui::SetTooltip(
-            "surface: media ignored; extinction: transmittance on every segment; impulse: "
-            "plus the tables' scattered light (method B); vpt: volumetric path tracing (the "
-            "ground truth)");
     if (ImGui::CollapsingHeader("Media", ImGuiTreeNodeFlags_DefaultOpen)) {
         if (b.media->empty()) ImGui::TextDisabled("no media: the tables are never loaded");
         for (size_t i = 0; i < b.media->size(); ++i) {
@@ -327,6 +314,27 @@ void draw_probe_lobes(Workbench::State& s) {
 
 BakeMethod bake_method(const Workbench::State& s) {
     return s.bake->method;
+}
+
+void switch_bake_method(Workbench::State& s, BakeMethod method) {
+    BakeSession& b = *s.bake;
+    if (method == b.method) return;
+    stop_bake_jobs(s);
+    b.method = method;
+    b.baker_dirty = true;
+    restart_bake(s);
+}
+
+void follow_bake_media(Workbench::State& s) {
+    const Media& media = *s.bake->media;
+    if (media.empty() || s.tables_media_version == media.version()) return;
+    s.tables_media_version = media.version();
+    // A grid's coefficients are its density 1's: scaled as the bake scales them.
+    const MediumDesc& d = media.desc(0);
+    TablesPanelState& t = *s.tables;
+    t.sigma_s = float(d.sigma_s * d.density_scale);
+    t.sigma_a = float(d.sigma_a * d.density_scale);
+    t.g = float(d.g);
 }
 
 void apply_bake_setting(Workbench::State& s, const std::string& assignment) {

@@ -89,6 +89,9 @@ struct Workbench::State {
     std::string session_path = "freqlab-out/session.json";
     std::string scene_path;  // File > Open scene's field (the scene's file at start)
     BakeSessionPtr bake;     // set when the method is a bake method (surface ... vpt)
+    // The method menu's choice, taken after the panels are drawn (Workbench::set_method).
+    std::string pending_method;
+    uint64_t tables_media_version = ~uint64_t(0);  // the bake media the tables panel follows
 };
 
 // Throws Error on a bad bake setting; needs s.scene and s.device.
@@ -107,6 +110,11 @@ std::vector<std::string> bake_trace(Workbench::State& s, int x, int y);
 // Probes' SH lobes over the viewport image (call inside the viewport window).
 void draw_probe_lobes(Workbench::State& s);
 BakeMethod bake_method(const Workbench::State& s);  // needs s.bake
+// Another bake method in the same session (media sliders, camera and settings kept).
+void switch_bake_method(Workbench::State& s, BakeMethod method);
+// The Method B tables panel's sliders take the bake's first medium's coefficients whenever
+// they change (the media sliders, a session), so the lobes shown are the bake's.
+void follow_bake_media(Workbench::State& s);
 // A bake.* assignment (Workbench::apply_setting): the bake restarts with it.
 void apply_bake_setting(Workbench::State& s, const std::string& assignment);
 // What an export of the bake says made it (scene/provenance.h): its method, bake.* settings,

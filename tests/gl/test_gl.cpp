@@ -445,21 +445,86 @@ TEST(GlWorkbench, BakeSessionKeepsMethodSettingsAndMedia) {
     }
 }
 
-// File > Open scene: a missing file is an error naming it, shown in the UI; a good one renders
-// with the method and settings kept.
+// File > Open scene: a missing file is an error naming it, shown in the UI, the workbench as it
+// was; a good one renders with the method and settings chosen in the GUI (not only --set's:
+// the panels edit the state, and Open scene went back to the start's options, cache ->
+// gbuffer, sliders to their defaults).
 TEST(GlWorkbench, OpenSceneKeepsMethodAndSettings) {
     GlSession gl;
     Workbench wb(small_scene("depth"));
     run_until_shown(gl, wb);
+    // GUI-side: the method menu, then a slider's setting.
+    wb.set_method("mis");
+    wb.apply_setting("mis.spp=3");
+    wb.apply_setting("frame.width=144");
+    run_until_shown(gl, wb);
+    EXPECT_EQ(wb.method(), "mis");
     wb.open_scene("no_such_scene.json");
     render_ui_frame(*gl.host, wb);
     EXPECT_NE(wb.error().find("no_such_scene.json"), std::string::npos) << wb.error();
+    EXPECT_EQ(wb.method(), "mis");
+    ASSERT_NE(wb.layers(), nullptr) << "the shown frame stays";
     wb.open_scene(std::string(FREQLAB_SOURCE_DIR) + "/scenes/analytic/sphere_on_plane.json");
     run_until_shown(gl, wb);
     EXPECT_TRUE(wb.error().empty()) << wb.error();
+    EXPECT_EQ(wb.method(), "mis");
     ASSERT_NE(wb.layers(), nullptr);
-    EXPECT_EQ(wb.layers()->width(), 160);  // frame.width=160 of small_scene stayed
+    EXPECT_EQ(wb.layers()->width(), 144);  // the GUI's frame.width
+    const nlohmann::json p = wb.export_provenance();
+    EXPECT_EQ(p["method"], "mis");
+    EXPECT_EQ(p["settings"]["mis"]["spp"], 3) << p.dump();
+}
+
+// The method menu holds the bake methods too: switching opens the bake session with the
+// settings kept, another bake method keeps the session (its media sliders), and back.
+TEST(GlWorkbench, MethodMenuReachesTheBakes) {
+    GlSession gl;
+    WorkbenchOptions o = small_scene("");
+    o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/cornell_fog.json";
+    Workbench wb(o);
+    run_until_shown(gl, wb);
+    EXPECT_TRUE(wb.error().empty()) << wb.error();
+    wb.set_method("extinction");
+    wb.apply_setting("bake.spp=2");
+    wb.apply_setting("bake.texel_density=4");
+    run_until_shown(gl, wb);
+    EXPECT_EQ(wb.method(), "extinction");
+    ASSERT_NE(wb.layers(), nullptr);
+    EXPECT_NE(wb.layers()->find("lm_irradiance"), nullptr) << "the bake's preview";
+    EXPECT_EQ(wb.layers()->width(), 160);  // frame.* kept: the preview's size
+    EXPECT_EQ(wb.export_provenance()["settings"]["bake"]["spp"], 2);
+    wb.set_method("surface");
+    run_until_shown(gl, wb);
+    EXPECT_EQ(wb.method(), "surface");
+    EXPECT_EQ(wb.export_provenance()["settings"]["bake"]["spp"], 2);
+    wb.set_method("gbuffer");
+    run_until_shown(gl, wb);
+    EXPECT_EQ(wb.method(), "gbuffer");
     EXPECT_NE(wb.layers()->find("depth"), nullptr);
+    EXPECT_THROW(wb.set_method("no_such_method"), Error);
+}
+
+// `gui SCENE --method impulse --tables --headless --screenshot F` waited for a tables panel a
+// bake session never drew (> 10 minutes at 100 % CPU): the panel is in bake sessions now, its
+// sliders on the scene's medium.
+TEST(GlWorkbench, TablesPanelInABakeSession) {
+    const fs::path out = fs::temp_directory_path() / "freqlab_bake_tables.png";
+    fs::remove(out);
+    WorkbenchOptions o;
+    o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/cornell_fog.json";
+    o.method = "impulse";
+    o.settings = {"frame.width=96", "frame.height=72", "bake.spp=2", "bake.texel_density=4",
+                  "bake.probes_x=0"};
+    o.show_tables = true;
+    o.screenshot = out.string();
+    o.width = 900;
+    o.height = 600;
+    ASSERT_EQ(run_headless(o), 0);
+    EXPECT_TRUE(fs::exists(out));
+    GlSession gl;
+    Workbench wb(o);
+    for (int i = 0; i < 2000 && !wb.tables_ready(); ++i) render_ui_frame(*gl.host, wb);
+    EXPECT_TRUE(wb.tables_ready());
 }
 
 // A cache.* setting applied from outside the panel (sessions, scripts) re-renders like the
