@@ -98,6 +98,9 @@ int main(int argc, char** argv) {
     gui->add_option("--session", gui_session,
                     "session JSON to load (File > Save session writes one)");
     gui->add_option("--inspect", gui_inspect, "X,Y: select this pixel in the inspector");
+    bool gui_inspect_trace = false;
+    gui->add_flag("--inspect-trace", gui_inspect_trace,
+                  "open the inspector on its trace tab (the method's record of the pixel)");
     gui->add_option("--warm-from", gui_warm, "render frames from this one up to --frame first");
 
     freqlab::RenderArgs r;
@@ -256,6 +259,7 @@ int main(int argc, char** argv) {
         options.session = gui_session;
         options.compare = gui_compare;
         options.show_tables = gui_tables;
+        options.inspect_trace = gui_inspect_trace;
         options.show_env_bandwidth = gui_env_bandwidth;
         options.tables_emitter = int(freqlab::parse_emitter(tables_emitter));
         if (!gui_inspect.empty()) {

@@ -271,6 +271,7 @@ void Workbench::reset(const WorkbenchOptions& options, Scene* loaded) {
     s.split = options.compare;
     s.tables->open = options.show_tables;
     s.tables->emitter = options.tables_emitter;
+    s.select_trace_tab = options.inspect_trace;
     s.pick_x = options.inspect_x;
     s.pick_y = options.inspect_y;
     s.error.clear();
@@ -440,6 +441,9 @@ void Workbench::draw(int fb_w, int fb_h) {
 
 void Workbench::set_frame(int frame) {
     s_->frame = std::clamp(frame, 0, s_->scene.frame_count - 1);
+}
+const std::vector<std::string>& Workbench::trace_lines() const {
+    return s_->trace_lines;
 }
 int Workbench::frame() const {
     return s_->frame;

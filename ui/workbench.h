@@ -35,6 +35,7 @@ struct WorkbenchOptions {
     int width = 1280, height = 760;
     std::vector<std::string> settings;   // "key=value", as --set
     int inspect_x = -1, inspect_y = -1;  // pixel selected in the inspector
+    bool inspect_trace = false;          // the inspector opens on its trace tab
     int warm_from = -1;                  // render frames warm_from .. frame-1 first (stats strip)
     // Wall-clock timings on screen (status line, stats strip, inspector). Off gives pictures
     // that depend only on the state: what tests compare across hosts.
@@ -75,8 +76,10 @@ class Workbench {
     DisplayRange shown_range() const;
     void select_pixel(int x, int y);
     std::vector<InspectorRow> inspect() const;  // every layer at the selected pixel
-    ScreenRect image_rect() const;              // where the viewport image was drawn
-    ScreenRect colorbar_rect() const;           // the colorbar's gradient (empty if none)
+    // The inspector's trace of the selected pixel as drawn (empty until it is computed).
+    const std::vector<std::string>& trace_lines() const;
+    ScreenRect image_rect() const;     // where the viewport image was drawn
+    ScreenRect colorbar_rect() const;  // the colorbar's gradient (empty if none)
     std::vector<std::pair<std::string, ScreenRect>> legend_swatches() const;
     const std::string& error() const;
 

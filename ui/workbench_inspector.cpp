@@ -54,16 +54,9 @@ void draw_cone_samples(const RadiancePoint& rp) {
 
 }  // namespace
 
-void draw_inspector(Workbench& wb, Workbench::State& s) {
-    if (!s.shown || s.pick_x < 0) {
-        ImGui::TextWrapped("Click a pixel in the viewport to see every layer's value there.");
-        return;
-    }
-    if (s.shown->environment_view)
-        ImGui::Text("texel (%d, %d) of the environment bandwidth view", s.pick_x, s.pick_y);
-    else
-        ImGui::Text("pixel (%d, %d), frame %d", s.pick_x, s.pick_y, s.shown->frame);
-    ImGui::Separator();
+namespace {
+
+void draw_values(Workbench& wb, const Workbench::State& s) {
     for (const InspectorRow& row : wb.inspect()) {
         std::string values;
         char buf[32];
@@ -78,18 +71,27 @@ void draw_inspector(Workbench& wb, Workbench::State& s) {
     for (const auto& [key, value] : s.shown->stats.items())
         if (!value.is_object() && (s.options.show_timings || key != "time_ms"))
             ImGui::Text("%-14s %s", key.c_str(), value.dump().c_str());
-    // The method's record of this pixel: its estimate re-run with every sample traced.
-    ImGui::Separator();
-    // One pixel is cheap to re-run; it waits while a render job owns the renderer.
+}
+
+// The method's record of the picked pixel: its estimate re-run with every sample traced, once
+// the renderer is free. While a job owns it, what the frame recorded when it ran: the cache's
+// decision for every entry landing near the pixel, with each test's numbers (FrameResult::
+// cache_records, read from the run, not recomputed).
+void update_trace(Workbench::State& s) {
     const bool idle = (!s.job || s.job->done()) && !s.show_env_bandwidth;
     const std::pair<int, int> pick{s.pick_x, s.pick_y};
-    if (s.bake && !bake_busy(s) && (s.trace_pixel != pick || s.trace_frame != s.shown->frame)) {
-        s.trace_lines = bake_trace(s, s.pick_x, s.pick_y);
-        s.trace_point.reset();
-        s.trace_pixel = pick;
-        s.trace_frame = s.shown->frame;
+    const bool stale = s.trace_pixel != pick || s.trace_frame != s.shown->frame;
+    if (s.bake) {
+        if (!bake_busy(s) && stale) {
+            s.trace_lines = bake_trace(s, s.pick_x, s.pick_y);
+            s.trace_point.reset();
+            s.trace_pixel = pick;
+            s.trace_frame = s.shown->frame;
+            s.trace_partial = false;
+        }
+        return;
     }
-    if (s.renderer && idle && (s.trace_pixel != pick || s.trace_frame != s.shown->frame)) {
+    if (s.renderer && idle && (stale || s.trace_partial)) {
         RadiancePoint point;
         point.footprint_radius = -1.0;  // stays negative unless a radiance point was traced
         s.trace_lines = s.renderer->trace_pixel(*s.shown, s.pick_x, s.pick_y, 32, &point);
@@ -97,16 +99,71 @@ void draw_inspector(Workbench& wb, Workbench::State& s) {
         if (point.footprint_radius >= 0.0) s.trace_point = point;
         s.trace_pixel = pick;
         s.trace_frame = s.shown->frame;
+        s.trace_partial = false;
+    } else if (!idle && stale && s.shown->cache_records) {
+        char head[160];
+        std::snprintf(head, sizeof head,
+                      "(frame %d is rendering: the cache's decisions as frame %d recorded them; "
+                      "the full trace when the job ends)",
+                      s.job_frame, s.shown->frame);
+        s.trace_lines = {head};
+        for (std::string& line :
+             cache_entries_near(*s.shown->cache_records, s.shown->cache_snapshot.get(), s.pick_x,
+                                s.pick_y, 1, s.shown->layers.width(), s.config.cache, 32))
+            s.trace_lines.push_back(std::move(line));
+        s.trace_point.reset();
+        s.trace_pixel = pick;
+        s.trace_frame = s.shown->frame;
+        s.trace_partial = true;
     }
+}
+
+void draw_trace(const Workbench::State& s) {
+    const std::pair<int, int> pick{s.pick_x, s.pick_y};
     if (s.trace_point && s.trace_pixel == pick) draw_cone_samples(*s.trace_point);
-    ImGui::TextDisabled("trace of this pixel's estimate");
-    if (!s.trace_lines.empty() && s.trace_pixel == pick) {
-        // Wrapped: a trace line is read whole (a scrollbar hid the values at their ends).
-        ImGui::BeginChild("trace", ImVec2(0, 0), true);
-        ImGui::PushTextWrapPos(0.0f);
-        for (const std::string& l : s.trace_lines) ImGui::TextUnformatted(l.c_str());
-        ImGui::PopTextWrapPos();
-        ImGui::EndChild();
+    if (s.trace_lines.empty() || s.trace_pixel != pick) {
+        ImGui::TextDisabled("the trace waits for the render job to end");
+        return;
+    }
+    // Wrapped: a trace line is read whole (a scrollbar hid the values at their ends).
+    ImGui::BeginChild("trace", ImVec2(0, 0), true);
+    ImGui::PushTextWrapPos(0.0f);
+    for (const std::string& l : s.trace_lines) ImGui::TextUnformatted(l.c_str());
+    ImGui::PopTextWrapPos();
+    ImGui::EndChild();
+}
+
+}  // namespace
+
+void draw_inspector(Workbench& wb, Workbench::State& s) {
+    if (!s.shown || s.pick_x < 0) {
+        ImGui::TextWrapped("Click a pixel in the viewport to see every layer's value there.");
+        return;
+    }
+    if (s.shown->environment_view)
+        ImGui::Text("texel (%d, %d) of the environment bandwidth view", s.pick_x, s.pick_y);
+    else
+        ImGui::Text("pixel (%d, %d), frame %d", s.pick_x, s.pick_y, s.shown->frame);
+    update_trace(s);
+    // Tabs: the trace gets the whole panel, whatever the window's height (under the values it
+    // was squeezed to 0 px at 1280 x 760 and 1600 x 900).
+    if (ImGui::BeginTabBar("inspector")) {
+        if (ImGui::BeginTabItem("values")) {
+            draw_values(wb, s);
+            ImGui::EndTabItem();
+        }
+        const std::string trace_tab =
+            "trace (" +
+            std::to_string(s.trace_pixel == std::pair{s.pick_x, s.pick_y} ? s.trace_lines.size()
+                                                                          : size_t(0)) +
+            " lines)###trace";
+        if (ImGui::BeginTabItem(trace_tab.c_str(), nullptr,
+                                s.select_trace_tab ? ImGuiTabItemFlags_SetSelected : 0)) {
+            draw_trace(s);
+            ImGui::EndTabItem();
+        }
+        s.select_trace_tab = false;
+        ImGui::EndTabBar();
     }
 }
 }  // namespace freqlab::ui

@@ -81,6 +81,8 @@ struct Workbench::State {
     std::optional<RadiancePoint> trace_point;  // method points: the pixel's radiance point
     std::pair<int, int> trace_pixel{-1, -1};
     int trace_frame = -1;
+    bool trace_partial = false;     // the lines are the frame's recorded decisions only
+    bool select_trace_tab = false;  // --inspect-tab trace, sessions: open the inspector on it
     std::unique_ptr<TablesPanelState> tables = make_tables_panel();
     // Method A's environment bandwidth hierarchy, shown in the viewport instead of the frame.
     bool show_env_bandwidth = false;

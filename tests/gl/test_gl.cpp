@@ -527,6 +527,44 @@ TEST(GlWorkbench, TablesPanelInABakeSession) {
     EXPECT_TRUE(wb.tables_ready());
 }
 
+// The inspector's "why" for the cache: re-run when the renderer is free; while a job renders
+// the next frames, the decisions the shown frame recorded when it ran (it showed nothing then).
+TEST(GlWorkbench, CacheTraceExistsWhileAJobRuns) {
+    GlSession gl(1280, 760);
+    WorkbenchOptions o = small_scene("cache_decisions");
+    o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/rotor.json";
+    o.method = "cache";
+    o.frame = 2;
+    o.warm_from = 0;
+    o.inspect_trace = true;
+    Workbench wb(o);
+    for (int f = 0; f <= 2; ++f) {
+        wb.set_frame(f);
+        run_until_shown(gl, wb);
+    }
+    wb.select_pixel(80, 45);
+    render_ui_frame(*gl.host, wb);
+    ASSERT_FALSE(wb.trace_lines().empty());
+    const std::string full = wb.trace_lines()[0];
+    EXPECT_EQ(full.find("is rendering"), std::string::npos) << full;
+    wb.set_frame(8);                // frames 3 .. 8 in order: a job of several frames
+    wb.select_pixel(81, 46);        // another pixel while it runs
+    render_ui_frame(*gl.host, wb);  // the job started in this frame; it cannot have ended
+    ASSERT_GE(wb.trace_lines().size(), 2u);
+    EXPECT_NE(wb.trace_lines()[0].find("is rendering"), std::string::npos) << wb.trace_lines()[0];
+    EXPECT_NE(wb.trace_lines()[1].find("entries land within 1 px of (81, 46)"), std::string::npos)
+        << wb.trace_lines()[1];
+    bool decided = false;  // each entry's decision, e.g. "reused" or "discard_temporal"
+    for (const std::string& l : wb.trace_lines())
+        decided |=
+            l.find(": reused") != std::string::npos || l.find(": discard") != std::string::npos;
+    EXPECT_TRUE(decided);
+    wb.wait_for_render();
+    run_until_shown(gl, wb);
+    render_ui_frame(*gl.host, wb);
+    EXPECT_EQ(wb.trace_lines()[0].find("is rendering"), std::string::npos) << "the full trace";
+}
+
 // A cache.* setting applied from outside the panel (sessions, scripts) re-renders like the
 // panel does: it used to only redraw, so the frame kept the old cache's decisions.
 TEST(GlWorkbench, ApplySettingRerendersOnACacheSetting) {
