@@ -442,6 +442,17 @@ void Workbench::draw(int fb_w, int fb_h) {
 void Workbench::set_frame(int frame) {
     s_->frame = std::clamp(frame, 0, s_->scene.frame_count - 1);
 }
+std::vector<std::pair<float, float>> Workbench::probe_marks() const {
+    std::vector<std::pair<float, float>> out;
+    for (const ImVec2& p : s_->probe_marks) out.emplace_back(p.x, p.y);
+    return out;
+}
+
+void Workbench::set_view(float zoom, float cx, float cy) {
+    s_->zoom = std::clamp(zoom, 1.0f, 64.0f);
+    s_->centre = ImVec2(cx, cy);
+}
+
 const std::vector<std::string>& Workbench::trace_lines() const {
     return s_->trace_lines;
 }

@@ -80,6 +80,9 @@ class Workbench {
     const std::vector<std::string>& trace_lines() const;
     ScreenRect image_rect() const;     // where the viewport image was drawn
     ScreenRect colorbar_rect() const;  // the colorbar's gradient (empty if none)
+    std::vector<std::pair<float, float>> probe_marks() const;  // probes drawn (screen)
+    // The viewport's zoom (1 = fit) about the image's uv (cx, cy), as the wheel and drag set.
+    void set_view(float zoom, float cx, float cy);
     std::vector<std::pair<std::string, ScreenRect>> legend_swatches() const;
     const std::string& error() const;
 

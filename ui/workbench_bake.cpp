@@ -261,6 +261,7 @@ std::vector<std::string> bake_trace(Workbench::State& s, int x, int y) {
 }
 
 void draw_probe_lobes(Workbench::State& s) {
+    s.probe_marks.clear();
     if (!s.bake || !s.bake->show_lobes || !s.shown) return;
     BakeSession& b = *s.bake;
     std::vector<LightmapBaker::Probe> probes;
@@ -274,6 +275,7 @@ void draw_probe_lobes(Workbench::State& s) {
     const CameraRayGenerator cam(pose, w, h);
     const ScreenRect& r = s.image_rect;
     ImDrawList* draw = ImGui::GetWindowDrawList();
+    draw->PushClipRect(ImVec2(r.x0, r.y0), ImVec2(r.x1, r.y1), true);
     constexpr int kSteps = 48;
     // Each probe scaled to its own largest radius (22 px): lobe shapes, whatever the light's
     // fall-off; the inspector and probes.json have the values.
@@ -299,8 +301,12 @@ void draw_probe_lobes(Workbench::State& s) {
         if (z <= 0.0f) continue;
         const float xn = glm::dot(v, cam.right) / (z * cam.tan_half_fov * cam.aspect);
         const float yn = glm::dot(v, cam.up) / (z * cam.tan_half_fov);
-        const float px = r.x0 + (xn + 1.0f) * 0.5f * (r.x1 - r.x0);
-        const float py = r.y0 + (1.0f - yn) * 0.5f * (r.y1 - r.y0);
+        // The image's uv, then the viewport's zoom and pan (workbench_viewport.cpp shows uv
+        // centre +- 0.5 / zoom in the image rect): the lobes stay on their probes.
+        const float u = (xn + 1.0f) * 0.5f, uv_y = (1.0f - yn) * 0.5f, half = 0.5f / s.zoom;
+        const float px = r.x0 + (u - (s.centre.x - half)) / (2.0f * half) * (r.x1 - r.x0);
+        const float py = r.y0 + (uv_y - (s.centre.y - half)) / (2.0f * half) * (r.y1 - r.y0);
+        if (!r.contains(px, py)) continue;
         ImVec2 pts[kSteps];
         for (int k = 0; k < kSteps; ++k) {
             const float phi = kTwoPi * k / kSteps;
@@ -309,7 +315,9 @@ void draw_probe_lobes(Workbench::State& s) {
         }
         draw->AddPolyline(pts, kSteps, IM_COL32(255, 170, 60, 230), ImDrawFlags_Closed, 1.5f);
         draw->AddCircleFilled(ImVec2(px, py), 2.0f, IM_COL32(255, 255, 255, 230));
+        s.probe_marks.push_back({px, py});
     }
+    draw->PopClipRect();
 }
 
 BakeMethod bake_method(const Workbench::State& s) {

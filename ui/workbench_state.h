@@ -89,8 +89,9 @@ struct Workbench::State {
     std::unique_ptr<Job> env_bandwidth_job;
     std::unique_ptr<FrameResult> env_bandwidth;  // guarded by results_mutex
     std::string session_path = "freqlab-out/session.json";
-    std::string scene_path;  // File > Open scene's field (the scene's file at start)
-    BakeSessionPtr bake;     // set when the method is a bake method (surface ... vpt)
+    std::string scene_path;           // File > Open scene's field (the scene's file at start)
+    BakeSessionPtr bake;              // set when the method is a bake method (surface ... vpt)
+    std::vector<ImVec2> probe_marks;  // where draw_probe_lobes put each probe (screen)
     // The method menu's choice, taken after the panels are drawn (Workbench::set_method).
     std::string pending_method;
     uint64_t tables_media_version = ~uint64_t(0);  // the bake media the tables panel follows

@@ -565,6 +565,45 @@ TEST(GlWorkbench, CacheTraceExistsWhileAJobRuns) {
     EXPECT_EQ(wb.trace_lines()[0].find("is rendering"), std::string::npos) << "the full trace";
 }
 
+// Probe lobes follow the viewport's zoom and pan (they stayed where the fitted image had them).
+TEST(GlWorkbench, ProbeLobesFollowZoomAndPan) {
+    GlSession gl;
+    WorkbenchOptions o;
+    o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/cornell_fog.json";
+    o.method = "extinction";
+    o.settings = {"frame.width=160", "frame.height=120", "bake.spp=2",     "bake.texel_density=4",
+                  "bake.probes_x=2", "bake.probes_y=2",  "bake.probes_z=2"};
+    Workbench wb(o);
+    run_until_shown(gl, wb);
+    for (int i = 0; i < 400 && wb.probe_marks().empty(); ++i) {
+        wb.wait_for_render();
+        render_ui_frame(*gl.host, wb);
+    }
+    render_ui_frame(*gl.host, wb);
+    const auto fitted = wb.probe_marks();
+    ASSERT_GE(fitted.size(), 4u);  // of 8: those the camera sees
+    const ScreenRect r = wb.image_rect();
+    const float cx = 0.5f * (r.x0 + r.x1), cy = 0.5f * (r.y0 + r.y1);
+    // Twice as large about uv (0.45, 0.55): a probe at screen p goes to c + 2 (p - q), q where
+    // that uv was on the fitted image.
+    wb.set_view(2.0f, 0.45f, 0.55f);
+    render_ui_frame(*gl.host, wb);
+    render_ui_frame(*gl.host, wb);
+    const float qx = r.x0 + 0.45f * (r.x1 - r.x0), qy = r.y0 + 0.55f * (r.y1 - r.y0);
+    int inside = 0;
+    for (const auto& [x, y] : fitted) {
+        const float ex = cx + 2.0f * (x - qx), ey = cy + 2.0f * (y - qy);
+        if (!wb.image_rect().contains(ex, ey)) continue;
+        ++inside;
+        bool found = false;
+        for (const auto& [zx, zy] : wb.probe_marks())
+            found |= std::abs(zx - ex) < 1.0f && std::abs(zy - ey) < 1.0f;
+        EXPECT_TRUE(found) << "probe at " << x << ", " << y << " expected at " << ex << ", " << ey;
+    }
+    EXPECT_GT(inside, 0);
+    EXPECT_EQ(size_t(inside), wb.probe_marks().size()) << "probes outside the image are not drawn";
+}
+
 // A cache.* setting applied from outside the panel (sessions, scripts) re-renders like the
 // panel does: it used to only redraw, so the frame kept the old cache's decisions.
 TEST(GlWorkbench, ApplySettingRerendersOnACacheSetting) {
