@@ -81,6 +81,10 @@ int main(int argc, char** argv) {
     gui->add_option("--frame", gui_frame, "frame to show");
     gui->add_option("--overlay", overlay, "layer to overlay");
     gui->add_option("--size", gui_size, "window size WxH");
+    std::string gui_ui_scale;
+    gui->add_option("--ui-scale", gui_ui_scale,
+                    "scale of fonts, widgets and panels, 0.5 to 4 (default: the monitor's "
+                    "content scale; 1 offscreen)");
     std::string gui_method = "gbuffer";
     std::vector<std::string> gui_sets;
     gui->add_option("--method", gui_method, freqlab::render_method_list());
@@ -268,6 +272,13 @@ int main(int argc, char** argv) {
                 throw freqlab::Error("--inspect", gui_inspect, "expected X,Y");
         }
         if (!gui_warm.empty()) options.warm_from = freqlab::parse_count(gui_warm, "--warm-from");
+        if (!gui_ui_scale.empty()) {
+            char* end = nullptr;
+            const double scale = std::strtod(gui_ui_scale.c_str(), &end);
+            if (end == gui_ui_scale.c_str() || *end != '\0' || !(scale >= 0.5 && scale <= 4.0))
+                throw freqlab::Error("--ui-scale", gui_ui_scale, "expected a number from 0.5 to 4");
+            options.ui_scale = float(scale);
+        }
         if (!gui_size.empty()) {
             const auto [w, h] = freqlab::parse_size(gui_size, "--size");
             options.width = w, options.height = h;

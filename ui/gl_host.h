@@ -15,6 +15,8 @@ class GlHost {
     virtual void begin_frame() = 0;  // events / ImGui platform frame
     virtual void end_frame() = 0;    // present
     virtual void framebuffer_size(int* w, int* h) const = 0;
+    // The monitor's content scale (DPI / 96): what --ui-scale 0 (auto) scales the UI by.
+    virtual float content_scale() const { return 1.0f; }
     // The default framebuffer as RGB8, top row first (after drawing, before end_frame()).
     std::vector<unsigned char> read_rgb() const;
 };

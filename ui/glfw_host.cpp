@@ -55,6 +55,12 @@ void GlfwHost::end_frame() {
     glfwSwapBuffers(window_);
 }
 
+float GlfwHost::content_scale() const {
+    float x = 1.0f, y = 1.0f;
+    glfwGetWindowContentScale(window_, &x, &y);
+    return x > 0.0f ? x : 1.0f;
+}
+
 void GlfwHost::framebuffer_size(int* w, int* h) const {
     glfwGetFramebufferSize(window_, w, h);
 }

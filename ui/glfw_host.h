@@ -16,6 +16,7 @@ class GlfwHost : public GlHost {
     void begin_frame() override;
     void end_frame() override;
     void framebuffer_size(int* w, int* h) const override;
+    float content_scale() const override;
 
   private:
     GLFWwindow* window_ = nullptr;

@@ -2,15 +2,19 @@
 
 #include <imgui.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace freqlab::ui {
 
 namespace {
 
+std::string visible_label(const SettingField& f) {
+    return f.key + (f.unit.empty() ? "" : " (" + f.unit + ")");
+}
+
 uint32_t draw_field(const SettingsSchema& schema, const SettingField& f, void* object) {
-    const std::string label =
-        f.key + (f.unit.empty() ? "" : " (" + f.unit + ")") + "##" + schema.prefix() + "." + f.key;
+    const std::string label = visible_label(f) + "##" + schema.prefix() + "." + f.key;
     const double before = f.get(object);
     double after = before;
     switch (f.type) {
@@ -55,6 +59,22 @@ uint32_t draw_field(const SettingsSchema& schema, const SettingField& f, void* o
 }
 
 }  // namespace
+
+float settings_label_width(const SettingsGroup& group) {
+    float widest = 0.0f;
+    for (const SettingsGroup::Binding& b : group.bindings())
+        for (const SettingField& f : b.schema->fields())
+            widest = std::max(widest, ImGui::CalcTextSize(visible_label(f).c_str()).x);
+    return widest;
+}
+
+void push_label_room(float label_width) {
+    // Widgets take what the labels leave (labels were cut at "sigma_positi"), but never less
+    // than 40 % of the panel: a narrow panel is widened by dragging its edge.
+    const float avail = ImGui::GetContentRegionAvail().x;
+    const float room = label_width + ImGui::GetStyle().ItemInnerSpacing.x;
+    ImGui::PushItemWidth(std::max(avail - room, 0.4f * avail));
+}
 
 uint32_t draw_settings(const SettingsGroup& group, bool open) {
     uint32_t flags = 0;

@@ -163,7 +163,24 @@ void draw_method_menu(Workbench::State& s) {
             "Switching keeps the settings chosen so far.");
 }
 
+void draw_settings_panel_items(Workbench::State& s);
+
 void draw_settings_panel(Workbench::State& s) {
+    // Every label of the panel fits: the settings' and the bake panel's media sliders.
+    float labels = std::max(settings_label_width(s.config.settings_group()),
+                            ImGui::CalcTextSize("density scale").x);
+    if (s.bake) {
+        BakeSettings shown = bake_session_file(s).settings;
+        SettingsGroup bake;
+        bake.bind(BakeSettings::schema(), &shown);
+        labels = std::max(labels, settings_label_width(bake));
+    }
+    push_label_room(labels);
+    draw_settings_panel_items(s);
+    ImGui::PopItemWidth();
+}
+
+void draw_settings_panel_items(Workbench::State& s) {
     ImGui::Text("scene: %s", s.scene.name.c_str());
     // What the loader changed in the input (dropped triangles, negative texels read as 0).
     ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.8f, 0.3f, 1.0f));
@@ -357,11 +374,22 @@ Workbench::~Workbench() {
 
 void Workbench::draw(int fb_w, int fb_h) {
     State& s = *s_;
-    // The inspector widens with the window (traces are long lines); 300 px at most window sizes.
-    const float left_w = 320, bottom_h = 130, menu_h = ImGui::GetFrameHeight();
-    const float right_w = std::max(300.0f, 0.3f * (float(fb_w) - left_w));
-    const ImGuiWindowFlags fixed =
-        ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse;
+    // Panel sizes in units of the font (--ui-scale), resizable by their inner borders: the
+    // settings panel's right edge, the inspector's left edge, the timeline's top edge. The
+    // inspector starts wider on wide windows (traces are long lines).
+    const float k = ImGui::GetFontSize() / 13.0f, menu_h = ImGui::GetFrameHeight();
+    if (s.left_w <= 0.0f) {
+        s.left_w = 320.0f * k;
+        s.bottom_h = 130.0f * k;
+        s.right_w = std::max(300.0f * k, 0.3f * (float(fb_w) - s.left_w));
+    }
+    // Room for the viewport whatever the window: each side panel at most a third of it.
+    const float side_max = std::max(160.0f * k, float(fb_w) / 3.0f);
+    s.left_w = std::clamp(s.left_w, 160.0f * k, side_max);
+    s.right_w = std::clamp(s.right_w, 160.0f * k, side_max);
+    s.bottom_h = std::clamp(s.bottom_h, 90.0f * k, std::max(90.0f * k, 0.5f * float(fb_h)));
+    const float left_w = s.left_w, right_w = s.right_w, bottom_h = s.bottom_h;
+    const ImGuiWindowFlags fixed = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse;
 
     // Keyboard shortcuts (when no widget wants the keyboard).
     if (!ImGui::GetIO().WantCaptureKeyboard) {
@@ -408,12 +436,13 @@ void Workbench::draw(int fb_w, int fb_h) {
     ImGui::SetNextWindowPos(ImVec2(0, menu_h));
     ImGui::SetNextWindowSize(ImVec2(left_w, fb_h - bottom_h - menu_h));
     ImGui::Begin("Settings", nullptr, fixed);
+    s.left_w = ImGui::GetWindowWidth();  // a drag of its right edge
     draw_settings_panel(s);
     ImGui::End();
 
     ImGui::SetNextWindowPos(ImVec2(left_w, menu_h));
     ImGui::SetNextWindowSize(ImVec2(fb_w - left_w - right_w, fb_h - bottom_h - menu_h));
-    ImGui::Begin("Viewport", nullptr, fixed);
+    ImGui::Begin("Viewport", nullptr, fixed | ImGuiWindowFlags_NoResize);
     draw_viewport(s);
     if (s.bake) draw_probe_lobes(s);
     // Method A's cache: what each frame reused, shaded anew and discarded, under the image.
@@ -423,12 +452,14 @@ void Workbench::draw(int fb_w, int fb_h) {
     ImGui::SetNextWindowPos(ImVec2(fb_w - right_w, menu_h));
     ImGui::SetNextWindowSize(ImVec2(right_w, fb_h - bottom_h - menu_h));
     ImGui::Begin("Inspector", nullptr, fixed);
+    s.right_w = ImGui::GetWindowWidth();  // a drag of its left edge
     draw_inspector(*this, s);
     ImGui::End();
 
     ImGui::SetNextWindowPos(ImVec2(0, fb_h - bottom_h));
     ImGui::SetNextWindowSize(ImVec2(float(fb_w), bottom_h));
     ImGui::Begin("Timeline", nullptr, fixed | ImGuiWindowFlags_NoTitleBar);
+    s.bottom_h = ImGui::GetWindowHeight();  // a drag of its top edge
     draw_timeline(s);
     ImGui::End();
 
@@ -580,7 +611,7 @@ int run_loop(GlHost& host, Workbench& wb, const WorkbenchOptions& options, bool 
     if (options.inspect_x >= 0) wb.select_pixel(options.inspect_x, options.inspect_y);
     if (options.show_env_bandwidth) wb.show_env_bandwidth();
     if (options.show_tables)
-        for (int i = 0; i < 100000 && !wb.tables_ready(); ++i) {
+        for (int i = 0; i < 100000 && !wb.tables_ready() && wb.error().empty(); ++i) {
             render_ui_frame(host, wb);
             host.end_frame();
         }
@@ -633,6 +664,7 @@ struct ImGuiSession {
 namespace {
 
 int run_on_host(GlHost& host, const WorkbenchOptions& options, bool interactive) {
+    apply_ui_scale(options.ui_scale > 0.0f ? options.ui_scale : host.content_scale());
     ImGui_ImplOpenGL3_Init("#version 330");
     int code;
     {
@@ -645,6 +677,20 @@ int run_on_host(GlHost& host, const WorkbenchOptions& options, bool interactive)
 }
 
 }  // namespace
+
+void apply_ui_scale(float scale) {
+    if (!(scale > 0.0f) || scale == 1.0f) return;
+    ImGui::GetStyle().ScaleAllSizes(scale);
+    ImGuiIO& io = ImGui::GetIO();
+    const char* font = "/usr/share/fonts/truetype/dejavu/DejaVuSansMono.ttf";  // fonts-dejavu-core
+    if (fs::exists(font)) {
+        io.Fonts->AddFontFromFileTTF(font, 13.0f * scale);
+    } else {
+        ImFontConfig config;
+        config.SizePixels = 13.0f * scale;
+        io.Fonts->AddFontDefault(&config);
+    }
+}
 
 int run_workbench(const WorkbenchOptions& options) {
     ImGuiSession imgui;

@@ -33,6 +33,9 @@ struct WorkbenchOptions {
     std::string
         screenshot;  // when set: once the frame is shown, write the workbench as PNG and exit
     int width = 1280, height = 760;
+    // Scale of fonts, widgets and panels (--ui-scale): 0 takes the monitor's content scale
+    // (GLFW; 1 offscreen). Refused outside [0.5, 4] by the command line.
+    float ui_scale = 0.0f;
     std::vector<std::string> settings;   // "key=value", as --set
     int inspect_x = -1, inspect_y = -1;  // pixel selected in the inspector
     bool inspect_trace = false;          // the inspector opens on its trace tab
@@ -124,6 +127,10 @@ class Workbench {
     void reopen(const std::string& scene_path, const std::string& method, Scene* loaded);
     std::unique_ptr<State> s_;
 };
+
+// Scales ImGui's style and loads its font at 13 px x scale (DejaVu Sans Mono when the scale is
+// not 1; the default font otherwise). Call before the first frame.
+void apply_ui_scale(float scale);
 
 // One UI frame on a host: platform frame, ImGui frame, the workbench, GL draw.
 void render_ui_frame(GlHost& host, Workbench& workbench);

@@ -60,8 +60,9 @@ struct Workbench::State {
     DisplayRange shown_range;
     const FrameResult* shown = nullptr;
 
-    float zoom = 1.0f;          // 1 = fit
-    ImVec2 centre{0.5f, 0.5f};  // uv at the viewport centre
+    float left_w = 0.0f, right_w = 0.0f, bottom_h = 0.0f;  // panel sizes (px; 0: not yet set)
+    float zoom = 1.0f;                                     // 1 = fit
+    ImVec2 centre{0.5f, 0.5f};                             // uv at the viewport centre
     int pick_x = -1, pick_y = -1;
     ScreenRect image_rect, colorbar_rect;
     std::vector<std::pair<std::string, ScreenRect>> legend;
