@@ -5,51 +5,73 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=build/app/freqlab
 [ -x "$bin" ] || { echo "build first: bash scripts/setup.sh" >&2; exit 1; }
-shot() { out=$1; shift; env -u DISPLAY "$bin" gui "$@" --headless --screenshot "screenshots/$out"; }
+# Every shot twice: 1280x800 at scale 1 in screenshots/, and 2560x1600 at --ui-scale 2 (a HiDPI
+# screen) in screenshots/ui_scale_2/; a shot's own --size is its scale-1 size.
+mkdir -p screenshots/ui_scale_2
+shot() {
+  out=$1; shift
+  local size=1280x800 args=()
+  while [ $# -gt 0 ]; do
+    if [ "$1" = --size ]; then size=$2; shift 2; else args+=("$1"); shift; fi
+  done
+  local w=${size%x*} h=${size#*x}
+  env -u DISPLAY "$bin" gui "${args[@]}" --size "$size" --headless --screenshot "screenshots/$out"
+  env -u DISPLAY "$bin" gui "${args[@]}" --size "$((2 * w))x$((2 * h))" --ui-scale 2 --headless \
+      --screenshot "screenshots/ui_scale_2/$out"
+}
 shot viewport_color.png scenes/rotor.json --method mis --set mis.spp=32 --frame 0
 shot overlay_colorbar.png scenes/rotor.json --method mis --set mis.spp=32 --frame 0 --overlay variance
 shot inspector.png builtin:default --method mis --frame 0 --overlay object --inspect 320,250
 shot timeline_stats.png builtin:default --method mis --set mis.spp=8 --set frame.width=320 \
      --set frame.height=180 --warm-from 0 --frame 23
 xvfb-run -a -s "-screen 0 1280x800x24" "$bin" gui scenes/creatures.json --method mis \
-     --set mis.spp=16 --overlay normal --screenshot screenshots/window_creatures_normals.png
+     --set mis.spp=16 --overlay normal --size 1280x800 --screenshot screenshots/window_creatures_normals.png
+xvfb-run -a -s "-screen 0 2560x1600x24" "$bin" gui scenes/creatures.json --method mis \
+     --set mis.spp=16 --overlay normal --size 2560x1600 --ui-scale 2 \
+     --screenshot screenshots/ui_scale_2/window_creatures_normals.png
 shot compare_split.png scenes/rotor.json --method mis --set mis.spp=4 --set reference.spp=256 \
      --set frame.width=480 --set frame.height=270 --frame 0 --compare
 shot tables_panel.png builtin:default --method gbuffer --frame 0 --tables
-shot tables_panel_area.png builtin:default --method gbuffer --frame 0 --tables --tables-emitter area --size 1280x1100
+shot tables_panel_area.png builtin:default --method gbuffer --frame 0 --tables --tables-emitter area
 shot points_inspector.png scenes/rotor.json --method points --frame 3 --overlay N_omega --inspect 330,250 \
-     --size 1280x1000
+    
 shot env_bandwidth.png scenes/rotor.json --method gbuffer --frame 0 --env-bandwidth --overlay "B_L r=22.5deg"
 shot sparse_density.png scenes/rotor.json --method sparse --frame 0 --overlay density
 shot sparse_sampled.png scenes/rotor.json --method sparse --frame 0 --overlay sampled
 shot sparse_inspector.png scenes/rotor.json --method sparse --frame 0 --overlay sampled --inspect 300,280 \
-     --size 1280x1000
+    
 shot cache_decisions.png scenes/rotor.json --method cache --warm-from 0 --frame 6 --overlay cache_decisions \
-     --set frame.width=480 --set frame.height=270 --inspect 230,200 --size 1280x1000
+     --set frame.width=480 --set frame.height=270 --inspect 230,200
+# The cache's "why" for a pixel: the inspector's trace tab (each entry's tests and numbers).
+shot cache_trace.png scenes/rotor.json --method cache --warm-from 0 --frame 6 --overlay cache_decisions \
+     --set frame.width=480 --set frame.height=270 --inspect 230,200 --inspect-trace
 shot cache_decision_layer.png scenes/truck.json --method cache --warm-from 0 --frame 12 --overlay decision \
-     --set frame.width=480 --set frame.height=270 --size 1280x1000
+     --set frame.width=480 --set frame.height=270
 # Method B: the lightmapped preview of a bake and the in-scattered light alone.
 shot bake_cornell_impulse.png scenes/cornell_fog.json --method impulse --set bake.spp=256 \
-     --set frame.width=480 --set frame.height=360 --size 1280x800
+     --set frame.width=480 --set frame.height=360
 shot bake_smoke_inscatter.png scenes/smoke_room.json --method impulse --set bake.spp=128 \
-     --set frame.width=480 --set frame.height=360 --overlay lm_inscatter --inspect 240,200 --size 1280x800
+     --set frame.width=480 --set frame.height=360 --overlay lm_inscatter --inspect 240,200
 shot bake_zh_lobes.png scenes/cornell_fog.json --method impulse --set bake.spp=128 \
-     --set frame.width=480 --set frame.height=360 --inspect 150,335 --size 1280x800
+     --set frame.width=480 --set frame.height=360 --inspect 150,335
+# The Method B tables panel in a bake session, its sliders on the scene's fog.
+shot bake_tables_panel.png scenes/cornell_fog.json --method impulse --set bake.spp=64 \
+     --set frame.width=480 --set frame.height=360 --tables
 shot bake_split_vpt.png scenes/cornell_fog.json --method impulse --set bake.spp=64 \
-     --set frame.width=480 --set frame.height=360 --compare --size 1280x900
+     --set frame.width=480 --set frame.height=360 --compare
 # Method B, light scattered into shadows: an umbra texel's trace (the lit medium's visibility and
 # both contributions of the occluded connection) and the analytic scene, impulse | VPT.
 shot bake_shadow_trace.png scenes/analytic/haze_occluder.json --method impulse --set bake.spp=256 \
      --set bake.texel_density=8 --set bake.probes_x=0 --set frame.width=480 --set frame.height=360 \
-     --inspect 220,196 --size 1600x1000
+     --inspect 220,196 --inspect-trace
 shot bake_haze_occluder_split.png scenes/analytic/haze_occluder.json --method impulse \
      --set bake.spp=256 --set bake.texel_density=8 --set bake.probes_x=0 --set frame.width=480 \
-     --set frame.height=360 --compare --size 1280x900
+     --set frame.height=360 --compare
 # The same bake with its Monte Carlo terms unfiltered (bake.texel_mc_radius=0): 1 path in 50 runs
 # them, so at 256 spp each texel has ~5; the default filter averages them over its neighbours.
 shot bake_mc_unfiltered.png scenes/analytic/haze_occluder.json --method impulse \
      --set bake.spp=256 --set bake.texel_density=8 --set bake.probes_x=0 --set bake.texel_mc_radius=0 \
-     --set frame.width=480 --set frame.height=360 --size 1280x800
+     --set frame.width=480 --set frame.height=360
 # A paper figure of a categorical layer: what Export > Figure writes in the workbench (the same
 # pixels, checked by hand under Xvfb in session 20), from the command line: legend swatches in
 # the layer's own palette (white reused, orange temporal, blue spatial).

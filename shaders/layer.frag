@@ -2,7 +2,8 @@
 // Maps one float layer to display colours by its kind (core/image/colormap.h is the CPU
 // twin and the tests' reference): colour = exposure + sRGB, continuous = viridis LUT,
 // signed = diverging LUT symmetric about 0, categorical = palette, vectors = per component.
-// NaN / Inf show magenta so they never pass unnoticed.
+// NaN / Inf show magenta so they never pass unnoticed; a sparse layer's no-data pixels (0) are
+// transparent.
 in vec2 v_uv;
 out vec4 frag;
 uniform sampler2D u_layer;    // R32F or RGB32F, row 0 = top row of the layer
@@ -12,6 +13,7 @@ uniform float u_lo;
 uniform float u_hi;
 uniform float u_exposure;     // multiplier 2^EV
 uniform int u_channels;
+uniform int u_sparse;         // values only where a sample is: 0 elsewhere is "no data"
 
 float to_srgb(float c) {
     c = clamp(c, 0.0, 1.0);
@@ -30,6 +32,12 @@ void main() {
     bool bad = false;
     for (int c = 0; c < u_channels; ++c) bad = bad || isnan(v[c]) || isinf(v[c]);
     if (bad) { frag = vec4(1.0, 0.0, 1.0, 1.0); return; }
+    // No data is transparent: over colour it shows the colour, not the colormap's 0.
+    if (u_sparse == 1 && all(equal(v.rgb * vec3(1.0, float(u_channels > 1), float(u_channels > 2)),
+                                   vec3(0.0)))) {
+        frag = vec4(0.0);
+        return;
+    }
     vec3 rgb;
     if (u_mode == 0) {
         vec3 c = u_channels >= 3 ? v.rgb : vec3(v.r);

@@ -142,6 +142,7 @@ DisplayRange LayerView::render(const LayerSet& set, const Layer& layer, const Di
     glUniform1f(glGetUniformLocation(program_, "u_hi"), range.hi);
     glUniform1f(glGetUniformLocation(program_, "u_exposure"), std::exp2(params.exposure_ev));
     glUniform1i(glGetUniformLocation(program_, "u_channels"), std::min(layer.channels, 3));
+    glUniform1i(glGetUniformLocation(program_, "u_sparse"), layer.sparse ? 1 : 0);
     glBindVertexArray(vao_);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glBindVertexArray(0);

@@ -484,6 +484,10 @@ void Workbench::set_view(float zoom, float cx, float cy) {
     s_->centre = ImVec2(cx, cy);
 }
 
+const std::string& Workbench::reference_note() const {
+    return s_->reference_note;
+}
+
 const std::vector<std::string>& Workbench::trace_lines() const {
     return s_->trace_lines;
 }

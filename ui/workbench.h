@@ -107,6 +107,8 @@ class Workbench {
     void request_reference();
     bool reference_busy() const;
     const ImageMetrics* metrics() const;
+    // How the reference was chosen (bakes: its samples and measured noise against the error).
+    const std::string& reference_note() const;
     bool tables_ready() const;  // the tables panel has its tables
     void show_env_bandwidth();  // switches the viewport to it (waits for the hierarchy)
     // The name exported files of the shown result start with: scene, frame (or the

@@ -135,6 +135,7 @@ void restart_bake(Workbench::State& s) {
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
         s.references.clear();
+        s.reference_note.clear();
     }
     s.metrics.clear();
     start_bake(s);
@@ -192,6 +193,7 @@ void draw_bake_panel(Workbench::State& s) {
             s.reference_job.reset();  // a comparison holds the old view
             std::lock_guard<std::mutex> lock(s.results_mutex);
             s.references.clear();
+            s.reference_note.clear();
             s.metrics.clear();
             s.results[0] = preview_result(s, b, b.baked);
             s.view_dirty = true;
@@ -201,7 +203,8 @@ void draw_bake_panel(Workbench::State& s) {
     BakeSettings edited = b.settings;
     SettingsGroup group;
     group.bind(BakeSettings::schema(), &edited);
-    if (draw_settings(group, true) & kInvalidatesBake) {
+    // With the tables panel asked for (--tables) the bake settings start closed: it is in view.
+    if (draw_settings(group, !s.options.show_tables) & kInvalidatesBake) {
         stop_bake_jobs(s);
         b.settings = edited;
         b.baker_dirty = true;  // the atlas and the estimator's settings live in the baker
@@ -216,26 +219,78 @@ void draw_bake_panel(Workbench::State& s) {
     if (restart) restart_bake(s);
 }
 
+namespace {
+
+constexpr int kReferenceMaxFactor = 64;  // at most 64 x bake.spp for the reference
+
+// One VPT bake at `spp` from `seed`, seen from the preview camera.
+LayerSet vpt_preview(const Workbench::State& s, const BakeSession& b, int spp, uint64_t seed,
+                     Progress& progress) {
+    BakeSettings settings = b.settings;
+    settings.spp = spp;
+    settings.seed = seed;
+    LightmapBaker vpt(*b.rays, *b.media, nullptr, BakeMethod::Vpt, settings);
+    vpt.run(&progress);
+    std::vector<LayerSet> baked;
+    for (size_t i = 0; i < vpt.lightmaps().size(); ++i) baked.push_back(vpt.layers(i));
+    const CameraPose pose = orbit_pose(s.scene.camera.at(0.0f), b.yaw, b.pitch, b.zoom);
+    return render_lightmap_preview(*b.rays, pose, s.config.frame.width, s.config.frame.height,
+                                   vpt.lightmaps(), baked);
+}
+
+}  // namespace
+
+// The reference is the mean of two independent VPT bakes of N / 2 samples each, so that its
+// own noise is measured, not assumed: relMSE(mean) = relMSE(half A, half B) / 4 (the halves'
+// difference has twice a half's variance, their mean half of it). N starts at 4 x bake.spp and
+// doubles (up to 64 x) until that noise is below a quarter of the measured error of the bake
+// against it; the compare panel says where it stopped.
 void start_bake_reference(Workbench::State& s) {
-    BakeSession& b = *s.bake;
     s.reference_job_frame = 0;
+    s.reference_note.clear();
     Workbench::State* sp = &s;
-    s.reference_job = std::make_unique<Job>([sp](Progress& progress) {
-        BakeSession& bk = *sp->bake;
-        BakeSettings settings = bk.settings;
-        settings.spp = 4 * bk.settings.spp;
-        settings.seed = bk.settings.seed + 7919;  // independent of the bake it is compared to
-        LightmapBaker vpt(*bk.rays, *bk.media, nullptr, BakeMethod::Vpt, settings);
-        vpt.run(&progress);
-        std::vector<LayerSet> baked;
-        for (size_t i = 0; i < vpt.lightmaps().size(); ++i) baked.push_back(vpt.layers(i));
-        const CameraPose pose = orbit_pose(sp->scene.camera.at(0.0f), bk.yaw, bk.pitch, bk.zoom);
-        LayerSet preview = render_lightmap_preview(*bk.rays, pose, sp->config.frame.width,
-                                                   sp->config.frame.height, vpt.lightmaps(), baked);
-        std::lock_guard<std::mutex> lock(sp->results_mutex);
-        sp->references[0] = std::move(preview);
+    LayerSet test;
+    {
+        std::lock_guard<std::mutex> lock(s.results_mutex);
+        auto it = s.results.find(0);
+        if (it != s.results.end() && it->second.layers.find("color")) {
+            test = LayerSet(it->second.layers.width(), it->second.layers.height());
+            test.add("color", LayerKind::Color, 3).data = it->second.layers.get("color").data;
+        }
+    }
+    s.reference_job = std::make_unique<Job>([sp, test](Progress& progress) {
+        const BakeSession& bk = *sp->bake;
+        const int base = std::max(2, 4 * bk.settings.spp);
+        for (int n = base;; n *= 2) {
+            const LayerSet a = vpt_preview(*sp, bk, n / 2, bk.settings.seed + 7919, progress);
+            const LayerSet b = vpt_preview(*sp, bk, n / 2, bk.settings.seed + 15838, progress);
+            LayerSet mean(a.width(), a.height());
+            Layer& c = mean.add("color", LayerKind::Color, 3);
+            const std::vector<float>&ca = a.get("color").data, &cb = b.get("color").data;
+            for (size_t i = 0; i < c.data.size(); ++i) c.data[i] = 0.5f * (ca[i] + cb[i]);
+            const double noise = compare_layers(a, b).relmse / 4.0;
+            const double error =
+                test.find("color") && test.width() == mean.width() && test.height() == mean.height()
+                    ? compare_layers(test, mean).relmse
+                    : 0.0;
+            const bool enough = noise <= 0.25 * error;
+            char note[240];
+            std::snprintf(note, sizeof note,
+                          "VPT reference: %d spp (two halves, seeds +7919 / +15838); its noise "
+                          "relMSE %.2e = %.0f%% of the measured %.2e%s",
+                          n, noise, error > 0 ? 100.0 * noise / error : 0.0, error,
+                          enough ? ""
+                                 : (n >= kReferenceMaxFactor * bk.settings.spp
+                                        ? " (stopped at 64 x bake.spp: the metrics include it)"
+                                        : ""));
+            const bool last = enough || n >= kReferenceMaxFactor * bk.settings.spp;
+            if (!last) continue;
+            std::lock_guard<std::mutex> lock(sp->results_mutex);
+            sp->references[0] = std::move(mean);
+            sp->reference_note = note;
+            return;
+        }
     });
-    (void)b;
 }
 
 std::vector<std::string> bake_trace(Workbench::State& s, int x, int y) {

@@ -77,7 +77,8 @@ struct Workbench::State {
     bool split = false;
     float split_position = 0.5f;
     LayerView reference_view;
-    std::vector<FigureInset> insets;           // for Export > Figure
+    std::string reference_note;       // how the reference was chosen (bakes: its measured noise)
+    std::vector<FigureInset> insets;  // for Export > Figure
     std::vector<std::string> trace_lines;      // the inspector's pixel trace
     std::optional<RadiancePoint> trace_point;  // method points: the pixel's radiance point
     std::pair<int, int> trace_pixel{-1, -1};
@@ -128,7 +129,8 @@ nlohmann::json bake_provenance(const Workbench::State& s);
 BakeSessionFile bake_session_file(const Workbench::State& s);
 // Stops the bake and takes the file's state (needs s.bake; the caller restarts it).
 void apply_bake_session(Workbench::State& s, const BakeSessionFile& f);
-// Compare for a bake: VPT at 4 x bake.spp, its preview as the frame's reference.
+// Compare for a bake: a VPT bake whose measured noise is below a quarter of the error it
+// measures (workbench_bake.cpp), its preview as the frame's reference.
 void start_bake_reference(Workbench::State& s);
 // Adds reference, error, relative_error to results[frame] and measures (results_mutex held).
 void attach_reference(Workbench::State& s, int frame);

@@ -202,6 +202,7 @@ void draw_compare_panel(Workbench::State& s) {
         ImGui::Text("RMSE   %.5f", m->second.rmse);
         ImGui::Text("relMSE %.5f", m->second.relmse);
         ImGui::Text("SSIM   %.4f", m->second.ssim);
+        if (!s.reference_note.empty()) ImGui::TextWrapped("%s", s.reference_note.c_str());
         ImGui::Checkbox("split view", &s.split);
         if (s.split) ImGui::SliderFloat("split", &s.split_position, 0.0f, 1.0f);
         ImGui::TextDisabled("layers: reference, error, relative_error");

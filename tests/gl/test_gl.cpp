@@ -628,6 +628,41 @@ TEST(GlWorkbench, ApplySettingRerendersOnACacheSetting) {
     EXPECT_NE(after, before) << "the frame was not rendered again with the new cache setting";
 }
 
+// Compare for a bake: the VPT reference's own noise is measured (two independent halves) and
+// kept below a quarter of the error it measures (at 4 x the samples it was as large as the
+// error: the metrics measured the reference).
+TEST(GlWorkbench, BakeReferenceNoiseIsBelowTheMeasuredError) {
+    GlSession gl;
+    WorkbenchOptions o;
+    o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/cornell_fog.json";
+    o.method = "impulse";
+    o.settings = {"frame.width=96", "frame.height=72", "bake.spp=4", "bake.texel_density=4",
+                  "bake.probes_x=0"};
+    Workbench wb(o);
+    run_until_shown(gl, wb);
+    wb.wait_for_render();
+    run_until_shown(gl, wb);
+    wb.request_reference();
+    for (int i = 0; i < 100000 && (wb.reference_busy() || !wb.metrics()); ++i)
+        render_ui_frame(*gl.host, wb);
+    ASSERT_NE(wb.metrics(), nullptr) << wb.error();
+    const std::string note = wb.reference_note();
+    int spp = 0;
+    double noise = 0, percent = 0, error = 0;
+    ASSERT_EQ(std::sscanf(note.c_str(),
+                          "VPT reference: %d spp (two halves, seeds +7919 / +15838); its noise "
+                          "relMSE %lf = %lf%% of the measured %lf",
+                          &spp, &noise, &percent, &error),
+              4)
+        << note;
+    std::printf("%s\n", note.c_str());
+    EXPECT_GE(spp, 16);
+    EXPECT_GT(noise, 0.0);
+    const bool capped = note.find("stopped at 64") != std::string::npos;
+    EXPECT_TRUE(noise <= 0.25 * error || capped) << note;
+    EXPECT_NEAR(wb.metrics()->relmse, error, 1e-6 + 1e-3 * error) << "the metrics are this error";
+}
+
 // The environment bandwidth view is not a frame of the animation (it was flagged by the magic
 // frame -100, then -1): its exports say what they hold and it has no reference to render (a
 // request used to start a reference render of the non-existent frame).
