@@ -342,6 +342,37 @@ TEST(CachePipeline, StaticSceneSecondFrameShadesNothingAndMatches) {
     EXPECT_EQ(f1.stats["discards"]["temporal"].get<long>(), 0);
 }
 
+// Reused pixels show their entry's radiance-point values (they read 0: 76k of 102k pixels of a
+// cache frame had no B_x, sigma_V, ...): nothing moves, so frame 1's entry at a pixel is frame
+// 0's point there, and its kept values are that point's (B_L, sigma_rho, N_omega, B_S are not).
+TEST(CachePipeline, ReusedPixelsShowTheirEntrysPointValues) {
+    const Scene scene = still_rotor();
+    const RenderConfig config = small_config(RenderMethod::Cache, 160, 90, 64);
+    EmbreeDevice device;
+    FrameRenderer renderer(scene, config, device);
+    Progress progress;
+    const FrameResult f0 = renderer.render(0, progress), f1 = renderer.render(1, progress);
+    const std::vector<float>& decision = f1.layers.get("decision").data;
+    const std::vector<float>& sampled0 = f0.layers.get("sampled").data;
+    int compared = 0;
+    for (const char* name : {"sigma_V", "occlusion_ratio", "t_min", "B_x", "B_theta", "B_t"}) {
+        const std::vector<float>&a = f0.layers.get(name).data, &b = f1.layers.get(name).data;
+        for (size_t i = 0; i < decision.size(); ++i) {
+            if (decision[i] != 1.0f || sampled0[i] == 0.0f || sampled0[i] == 4.0f) continue;
+            // Entries keep these as half floats (relative rounding 2^-11).
+            ASSERT_NEAR(b[i], a[i], 5e-4f * std::max(1e-3f, std::abs(a[i])))
+                << name << " at pixel " << i;
+            ++compared;
+        }
+    }
+    EXPECT_GT(compared, 6 * 500);
+    const std::vector<float>& bx = f1.layers.get("B_x").data;
+    long reused = 0, with_value = 0;
+    for (size_t i = 0; i < decision.size(); ++i)
+        if (decision[i] == 1.0f) ++reused, with_value += bx[i] > 0.0f;
+    EXPECT_GT(with_value, reused / 2) << "reused pixels with their entry's B_x";
+}
+
 TEST(CachePipeline, NothingMovingMeansNoTemporalBandwidthAndASpinningSkyFeedsIt) {
     Scene scene = still_rotor();
     const RenderConfig config = small_config(RenderMethod::Points, 64, 36, 32);

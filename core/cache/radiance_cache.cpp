@@ -18,7 +18,8 @@ enum Flags : uint8_t {
     kKeyLightKnown = 128
 };
 
-// Half floats for what only sets radii and thresholds; clamped to the largest half.
+// Half floats for the merge weight and the observed-change references; clamped to the
+// largest half (a weight past 65504 samples, a log luminance past it: neither changes a test).
 uint16_t to_half(float v) {
     return Imath::half(std::isnan(v) ? v : std::clamp(v, -65504.0f, 65504.0f)).bits();
 }
@@ -65,8 +66,8 @@ vec3 octahedral_decode_half(uint32_t packed) {
 }
 
 size_t ObjectCache::bytes_per_slot() {
-    return 4 * sizeof(vec3) + sizeof(vec2) + 2 * sizeof(uint32_t) + 4 * sizeof(float) +
-           6 * sizeof(uint16_t) + sizeof(int16_t) + sizeof(uint8_t);
+    return 4 * sizeof(vec3) + sizeof(vec2) + 2 * sizeof(uint32_t) + 6 * sizeof(float) +
+           4 * sizeof(uint16_t) + sizeof(int16_t) + sizeof(uint8_t);
 }
 
 size_t ObjectCache::bytes() const {
@@ -82,7 +83,8 @@ void ObjectCache::grow_to(size_t n) {
     reflected_normal_.resize(n);
     for (auto* v : {&created_, &occlusion_, &sigma_v_, &t_min_}) v->resize(n);
     weight_.resize(n);
-    for (auto* v : {&B_x_, &B_theta_, &B_t_, &occlusion_field_, &shading_field_}) v->resize(n);
+    for (auto* v : {&B_x_, &B_t_}) v->resize(n);
+    for (auto* v : {&B_theta_, &occlusion_field_, &shading_field_}) v->resize(n);
     reflected_object_.resize(n, -1);
     flags_.resize(n, 0);
     // Lowest slots first out of the free list (it is popped from the back).
@@ -109,9 +111,9 @@ int ObjectCache::insert(const CacheEntry& e) {
     shading_[i] = e.shading;
     weight_[i] = to_half(e.weight);
     created_[i] = e.created;
-    B_x_[i] = to_half(e.B_x);
+    B_x_[i] = e.B_x;
     B_theta_[i] = to_half(e.B_theta);
-    B_t_[i] = to_half(e.B_t);
+    B_t_[i] = e.B_t;
     occlusion_[i] = e.occlusion_ratio;
     occlusion_field_[i] = to_half(e.occlusion_field);
     shading_field_[i] = to_half(e.shading_field);
@@ -145,9 +147,9 @@ CacheEntry ObjectCache::get(int slot) const {
     e.shading = shading_[i];
     e.weight = from_half(weight_[i]);
     e.created = created_[i];
-    e.B_x = from_half(B_x_[i]);
+    e.B_x = B_x_[i];
     e.B_theta = from_half(B_theta_[i]);
-    e.B_t = from_half(B_t_[i]);
+    e.B_t = B_t_[i];
     e.occlusion_ratio = occlusion_[i];
     e.occlusion_field = from_half(occlusion_field_[i]);
     e.shading_field = from_half(shading_field_[i]);

@@ -11,7 +11,8 @@
 // | shading            | demodulated radiance (texture divided out); mirrors: the radiance  |
 // | weight             | samples behind the value (merge weights; half float)              |
 // | created            | time (s) of the frame that computed it                            |
-// | B_x, B_theta, B_t  | the point's bandwidths (validity radii, lifespan); half floats    |
+// | B_x, B_t           | the point's spatial and temporal bandwidths (radius, lifespan)    |
+// | B_theta            | the angular bandwidth (angular radius); half float                |
 // | occlusion_ratio, sigma_v, t_min, occluded | the visibility statistics it stands for    |
 // | occlusion_field    | the upsampled occlusion ratio at its pixel when it was computed   |
 // | shading_field      | the upsampled log shading luminance there then (observed change)  |
@@ -86,8 +87,12 @@ class ObjectCache {
     std::vector<vec2> view_;                           // octahedral
     std::vector<uint32_t> normal_, reflected_normal_;  // octahedral, two halves
     std::vector<float> created_, occlusion_, sigma_v_, t_min_;
-    // Half floats: the bandwidths (radii, lifespan) and the observed-change references.
-    std::vector<uint16_t> B_x_, B_theta_, B_t_, occlusion_field_, shading_field_;
+    // B_x and B_t as floats: as halves, B_x past 65504 (185000 on rotor's mast edge) was
+    // clamped there, its validity radius 2.8x too wide (and B_t, B_x times a speed, alike).
+    std::vector<float> B_x_, B_t_;
+    // Half floats: the angular bandwidth (BRDF-limited, far below 65504) and the
+    // observed-change references.
+    std::vector<uint16_t> B_theta_, occlusion_field_, shading_field_;
     std::vector<uint16_t> weight_;  // half
     std::vector<int16_t> reflected_object_;
     std::vector<uint8_t> flags_;  // live, moving, occluded, mirror

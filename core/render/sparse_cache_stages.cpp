@@ -78,6 +78,17 @@ void SparseFrame::cache_resolve() {
         });
         for (size_t i = 0; i < n; ++i)
             if (keeper[i] >= 0 && !fresh[i]) reused.push_back(int(i));
+        reused_fields.assign(reused.size(), {});
+        reused_field_slot.assign(n, -1);
+        for (size_t k = 0; k < reused.size(); ++k) {
+            const CacheRecord& r = records[size_t(keeper[size_t(reused[k])])];
+            const CacheEntry e = cache->state.cache.object(r.object).get(r.slot);
+            // B_L, sigma_rho, B_S are not kept in an entry, and its weight is N_omega only until
+            // it merges: no data (0) there.
+            reused_fields[k] = {0.0f,    0.0f, 0.0f,  e.sigma_v, e.occlusion_ratio,
+                                e.t_min, 0.0f, e.B_x, e.B_theta, e.B_t};
+            reused_field_slot[size_t(reused[k])] = int(k);
+        }
         result.stats["stages"]["reproject"] =
             result.stats["stages"]["reproject"].get<double>() + ms_since(t0);
     }

@@ -6,6 +6,7 @@
 // sparse_cache_stages.cpp; the rest in sparse_pass.cpp. Internal to those two files.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <vector>
 
@@ -97,6 +98,10 @@ struct SparseFrame {
     std::vector<float> mu_v, sigma_v;
 
     std::vector<int> keeper, reused;
+    // The reused entries' own radiance-point values, read when they are resolved (the insert
+    // stage may move slots): the per-point layers show them on reused pixels.
+    std::vector<std::array<float, 10>> reused_fields;  // radiance_point_layer_names() order
+    std::vector<int> reused_field_slot;                // per pixel, -1: not reused
     // The upsampled occlusion ratio and log shading at every pixel: what the observed-change
     // tests compare between an entry's creation and now.
     std::vector<float> age, field, shading_field;

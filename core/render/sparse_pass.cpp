@@ -330,7 +330,9 @@ void SparseFrame::write_layers() {
     Layer& color = layers.add("color", LayerKind::Color, 3,
                               "direct lighting, sparse radiance points reconstructed");
     Layer& density_layer =
-        layers.add("density", LayerKind::Continuous, 1, "sampling density (samples per pixel)");
+        layers.add("density", LayerKind::Continuous, 1,
+                   "sampling density: radiance points per pixel (1 every pixel, 0.25 one in "
+                   "4; the initial grid's is 1 / stride^2)");
     Layer& sampled_layer =
         layers.add("sampled", LayerKind::Categorical, 1, "radiance points by origin");
     sampled_layer.legend = {"none", "initial", "adaptive", "fallback", "reused"};
@@ -350,7 +352,9 @@ void SparseFrame::write_layers() {
     std::vector<Layer*> part1;
     for (const std::string& name : radiance_point_layer_names())
         part1.push_back(
-            &layers.add(name, LayerKind::Continuous, 1, "at sampled pixels (0 elsewhere)"));
+            &layers.add(name, LayerKind::Continuous, 1,
+                        "at sampled pixels, reused ones the cache entry's (B_L, sigma_rho, "
+                        "N_omega, B_S are not kept in entries: 0 there); 0 elsewhere"));
 
     tbb::parallel_for(size_t(0), n, [&](size_t i) {
         vec3 c(0.0f);
@@ -376,7 +380,14 @@ void SparseFrame::write_layers() {
         if (!sampled[i]) return;
         const vec3 own = mirror[i] ? value[i] : value[i] * shading_points[i].albedo;
         for (int ch = 0; ch < 3; ++ch) sample_layer.data[3 * i + size_t(ch)] = own[ch];
-        if (!fresh[i]) return;
+        if (!fresh[i]) {
+            // A reused point: the cache entry's own values, as its pixel was when shaded.
+            const int slot = reused_field_slot.empty() ? -1 : reused_field_slot[i];
+            if (slot >= 0)
+                for (size_t c2 = 0; c2 < part1.size(); ++c2)
+                    part1[c2]->data[i] = finite_or_zero(reused_fields[size_t(slot)][c2]);
+            return;
+        }
         const RadiancePoint& rp = point_at(i);
         ray_layer.data[i] = float(rp.rays);
         const std::array<double, 10> v = radiance_point_fields(rp);
