@@ -323,15 +323,21 @@ RenderConfig small_config(RenderMethod method, int width, int height, int max_sa
     return config;
 }
 
-}  // namespace
-
-TEST(CachePipeline, StaticSceneSecondFrameShadesNothingAndMatches) {
+// Frames 0 and 1 of the still rotor by the cache at 160 x 90.
+std::pair<FrameResult, FrameResult> two_still_cache_frames() {
     const Scene scene = still_rotor();
     const RenderConfig config = small_config(RenderMethod::Cache, 160, 90, 64);
     EmbreeDevice device;
     FrameRenderer renderer(scene, config, device);
     Progress progress;
-    const FrameResult f0 = renderer.render(0, progress), f1 = renderer.render(1, progress);
+    FrameResult f0 = renderer.render(0, progress);
+    return {std::move(f0), renderer.render(1, progress)};
+}
+
+}  // namespace
+
+TEST(CachePipeline, StaticSceneSecondFrameShadesNothingAndMatches) {
+    const auto [f0, f1] = two_still_cache_frames();
     const long total = f1.stats["pixels_total"];
     EXPECT_LT(f1.stats["pixels_new"].get<long>(), total / 100);
     EXPECT_GT(f1.stats["pixels_reused"].get<long>(), 0);
@@ -346,12 +352,7 @@ TEST(CachePipeline, StaticSceneSecondFrameShadesNothingAndMatches) {
 // cache frame had no B_x, sigma_V, ...): nothing moves, so frame 1's entry at a pixel is frame
 // 0's point there, and its kept values are that point's (B_L, sigma_rho, N_omega, B_S are not).
 TEST(CachePipeline, ReusedPixelsShowTheirEntrysPointValues) {
-    const Scene scene = still_rotor();
-    const RenderConfig config = small_config(RenderMethod::Cache, 160, 90, 64);
-    EmbreeDevice device;
-    FrameRenderer renderer(scene, config, device);
-    Progress progress;
-    const FrameResult f0 = renderer.render(0, progress), f1 = renderer.render(1, progress);
+    const auto [f0, f1] = two_still_cache_frames();
     const std::vector<float>& decision = f1.layers.get("decision").data;
     const std::vector<float>& sampled0 = f0.layers.get("sampled").data;
     int compared = 0;

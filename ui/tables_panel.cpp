@@ -126,7 +126,8 @@ void draw_tables_panel(TablesPanelState& s) {
     // Legendre moments <P_l> = z_l / (z_0 sqrt(2l+1)) of the in-scattered light against log
     // distance: 1 is a delta towards the emitter, 0 isotropic; they fall as light diffuses.
     ImDrawList* dl = ImGui::GetWindowDrawList();
-    const float w = ImGui::GetContentRegionAvail().x, h = 110;
+    const float k = ImGui::GetFontSize() / 13.0f;  // --ui-scale
+    const float w = ImGui::GetContentRegionAvail().x, h = 110 * k;
     ImVec2 o = ImGui::GetCursorScreenPos();
     dl->AddRectFilled(o, ImVec2(o.x + w, o.y + h), IM_COL32(30, 30, 34, 255));
     dl->AddLine(ImVec2(o.x, o.y + h / 2), ImVec2(o.x + w, o.y + h / 2), IM_COL32(80, 80, 80, 255));
@@ -151,7 +152,7 @@ void draw_tables_panel(TablesPanelState& s) {
     // Polar cross-section of the in-scattered response at one distance; emitter to the right.
     double tilt = 0.0;
     const ZhVector z = response(s, s.lobe_distance, &tilt);
-    const float size = std::min(w, 160.0f);
+    const float size = std::min(w, 160.0f * k);
     o = ImGui::GetCursorScreenPos();
     const ImVec2 c(o.x + size / 2, o.y + size / 2);
     dl->AddRectFilled(o, ImVec2(o.x + size, o.y + size), IM_COL32(30, 30, 34, 255));

@@ -351,7 +351,7 @@ void Workbench::reopen(const std::string& scene_path, const std::string& method,
     WorkbenchOptions o = s.options;
     o.scene = scene_path;
     o.method = method;
-    o.frame = s.frame;
+    o.frame = is_bake_method(method) ? 0 : s.frame;  // a bake is one still frame
     o.settings.clear();
     o.layer.clear();  // the new method's layers differ: colour
     reset(o, loaded);

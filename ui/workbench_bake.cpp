@@ -365,7 +365,8 @@ void draw_probe_lobes(Workbench::State& s) {
         ImVec2 pts[kSteps];
         for (int k = 0; k < kSteps; ++k) {
             const float phi = kTwoPi * k / kSteps;
-            const float len = 22.0f * radii[i][size_t(k)] / largest[i];
+            const float len =
+                22.0f * ImGui::GetFontSize() / 13.0f * radii[i][size_t(k)] / largest[i];
             pts[k] = ImVec2(px + len * std::cos(phi), py - len * std::sin(phi));
         }
         draw->AddPolyline(pts, kSteps, IM_COL32(255, 170, 60, 230), ImDrawFlags_Closed, 1.5f);

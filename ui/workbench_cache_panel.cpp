@@ -60,7 +60,8 @@ void draw_cache_panel(Workbench::State& s) {
     ImGui::Text("frame %d: %ld entries, %.1f MB (%.0f B/entry)", s.frame, points, bytes / 1e6,
                 points ? double(bytes) / double(points) : 0.0);
     const ImVec2 origin = ImGui::GetCursorScreenPos();
-    const float width = ImGui::GetContentRegionAvail().x, height = 120.0f;
+    const float width = ImGui::GetContentRegionAvail().x,
+                height = 120.0f * ImGui::GetFontSize() / 13.0f;
     // The x axis spans the frames rendered so far (at least 10).
     int last = 9;
     for (const Series& x : series)

@@ -17,7 +17,8 @@ namespace {
 void draw_cone_samples(const RadiancePoint& rp) {
     ImGui::TextDisabled("pilot samples in the BRDF cone (N_L = %.0f, N_Omega = %.0f)", rp.N_L,
                         rp.N_omega);
-    const float size = std::min(ImGui::GetContentRegionAvail().x, 220.0f);
+    const float size =
+        std::min(ImGui::GetContentRegionAvail().x, 220.0f * ImGui::GetFontSize() / 13.0f);
     const ImVec2 o = ImGui::GetCursorScreenPos(), c(o.x + size / 2, o.y + size / 2);
     ImDrawList* dl = ImGui::GetWindowDrawList();
     dl->AddRectFilled(o, ImVec2(o.x + size, o.y + size), IM_COL32(24, 24, 28, 255));

@@ -14,25 +14,14 @@ namespace {
 
 constexpr int kHalfAzimuths = 32;
 
-// HG at every g node with the per-node constants hoisted out of the ray loop.
-struct HgNodeConstants {
-    double scale[kGNodeCount], a[kGNodeCount], b[kGNodeCount];
-    HgNodeConstants() {
-        for (int j = 0; j < kGNodeCount; ++j) {
-            const double g = g_node(j);
-            scale[j] = (1.0 - g * g) / (4.0 * kPiD);
-            a[j] = 1.0 + g * g;
-            b[j] = 2.0 * g;
-        }
-    }
-};
-
 using RadianceBlock = std::array<std::array<double, kGNodeCount>, kShiftBins>;
 
 // Single-scattered radiance x sin(theta) arriving from direction w (canonical medium, I0 = 1),
-// for every shift bin and g node: one ray integral shared by all of them.
-void radiance_times_sin(double D, const glm::dvec3& w, double theta, const HgNodeConstants& hg,
-                        const glm::dvec3* normals, RadianceBlock& out) {
+// for every shift bin and g node: one ray integral shared by all of them. `iso_only`: the
+// g = 0 node alone (the axis fit's pass; the 45 nodes' phase and sums were a third of the
+// tabulation).
+void radiance_times_sin(double D, const glm::dvec3& w, double theta, const HgAtGNodes& hg,
+                        const glm::dvec3* normals, RadianceBlock& out, bool iso_only) {
     using boost::math::quadrature::gauss;
     for (auto& row : out) row.fill(0.0);
     const double ct = std::cos(theta), st = std::sin(theta);
@@ -51,14 +40,18 @@ void radiance_times_sin(double D, const glm::dvec3& w, double theta, const HgNod
             // Equi-angular along the ray: dt / r^2 = dphi / h; times sin(theta) = 1 / D.
             const double common = wr[e] * half / D * std::exp(-(t + r));
             double phase[kGNodeCount];
-            for (int j = 0; j < kGNodeCount; ++j) {
-                const double x = hg.a[j] - hg.b[j] * c;
-                phase[j] = hg.scale[j] / (x * std::sqrt(x));
+            const int j0 = iso_only ? kGIsotropicNode : 0;
+            const int j1 = iso_only ? kGIsotropicNode + 1 : kGNodeCount;
+            if (iso_only) {
+                const double x = hg.a[j0] - hg.b[j0] * c;
+                phase[j0] = hg.scale[j0] / (x * std::sqrt(x));
+            } else {
+                hg.eval(c, phase);
             }
             for (int s = 0; s < kShiftBins; ++s) {
                 const double emission = glm::dot(normals[s], u);
                 if (emission <= 0) continue;
-                for (int j = 0; j < kGNodeCount; ++j)
+                for (int j = j0; j < j1; ++j)
                     out[size_t(s)][size_t(j)] += common * emission * phase[j];
             }
         }
@@ -69,7 +62,7 @@ void radiance_times_sin(double D, const glm::dvec3& w, double theta, const HgNod
 void integrate(double D, PolarRule rule, const glm::dvec3* normals, const glm::dvec3* axes,
                std::array<GNodeResponses, kShiftBins>* zh,
                std::array<ShVector, kShiftBins>* sh_iso) {
-    const HgNodeConstants hg;
+    const HgAtGNodes hg;
     RadianceBlock radiance;
     double y[kAreaShCount], p[kImpulseOrder], norm[kImpulseOrder];
     for (int l = 0; l < kImpulseOrder; ++l) norm[l] = std::sqrt((2.0 * l + 1.0) / (4.0 * kPiD));
@@ -79,7 +72,7 @@ void integrate(double D, PolarRule rule, const glm::dvec3* normals, const glm::d
         for (int k = 0; k < kHalfAzimuths; ++k) {
             const double azimuth = kPiD * (k + 0.5) / kHalfAzimuths;
             const glm::dvec3 w(st * std::cos(azimuth), st * std::sin(azimuth), ct);
-            radiance_times_sin(D, w, node.theta, hg, normals, radiance);
+            radiance_times_sin(D, w, node.theta, hg, normals, radiance, !zh);
             // Both mirror halves of the azimuth circle.
             const double weight = node.weight * 2.0 * kPiD / kHalfAzimuths;
             if (sh_iso) {

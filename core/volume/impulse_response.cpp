@@ -45,21 +45,10 @@ struct LegendrePhaseBasis {
 // A single-scattering table's columns: the Legendre basis, then HG at every g node.
 struct SingleTableColumns {
     static constexpr int count = kSingleColumns;
-    double scale[kGNodeCount], a[kGNodeCount], b[kGNodeCount];
-    SingleTableColumns() {
-        for (int j = 0; j < kGNodeCount; ++j) {
-            const double g = g_node(j);
-            scale[j] = (1.0 - g * g) / (4.0 * kPiD);
-            a[j] = 1.0 + g * g;
-            b[j] = 2.0 * g;
-        }
-    }
+    HgAtGNodes hg;
     void eval(double c, double* out) const {
         LegendrePhaseBasis{}.eval(c, out);
-        for (int j = 0; j < kGNodeCount; ++j) {
-            const double x = a[j] - b[j] * c;
-            out[kPhaseTerms + j] = scale[j] / (x * std::sqrt(x));
-        }
+        hg.eval(c, out + kPhaseTerms);
     }
 };
 
@@ -158,6 +147,15 @@ double g_node(int j) {
     const int panel = j / kGNodes, k = j % kGNodes;
     const double a = kGPanelEdges[size_t(panel)], b = kGPanelEdges[size_t(panel) + 1];
     return 0.5 * (a + b) + 0.5 * (b - a) * std::cos((2.0 * k + 1.0) * kPiD / (2.0 * kGNodes));
+}
+
+HgAtGNodes::HgAtGNodes() {
+    for (int j = 0; j < kGNodeCount; ++j) {
+        const double g = g_node(j);
+        scale[j] = (1.0 - g * g) / (4.0 * kPiD);
+        a[j] = 1.0 + g * g;
+        b[j] = 2.0 * g;
+    }
 }
 
 int g_panel(double g) {

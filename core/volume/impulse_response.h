@@ -19,6 +19,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <functional>
 #include <vector>
 
@@ -79,6 +80,19 @@ int g_panel(double g);
 // Barycentric interpolation weights at g for the kGNodes nodes of g_panel(g) (they sum to 1).
 void g_node_weights(double g, double* weights);
 using GNodeResponses = std::array<ZhVector, kGNodeCount>;
+
+// HG at every g node, its per-node constants computed once: what the single-scattering and
+// area tables evaluate at each quadrature point.
+struct HgAtGNodes {
+    double scale[kGNodeCount], a[kGNodeCount], b[kGNodeCount];
+    HgAtGNodes();
+    void eval(double c, double* out) const {
+        for (int j = 0; j < kGNodeCount; ++j) {
+            const double x = a[j] - b[j] * c;
+            out[j] = scale[j] / (x * std::sqrt(x));
+        }
+    }
+};
 
 // A single-scattering table's columns at one distance: the kPhaseTerms Legendre responses,
 // then HG's response at each of the kGNodeCount g nodes (one quadrature pass gives all).
