@@ -119,7 +119,15 @@ void draw_viewport(Workbench::State& s) {
         return;
     }
     const LayerSet& L = s.shown->layers;
-    ImGui::SetNextItemWidth(180);
+    // Wide enough for the longest layer name ("cache_decisions" was cut at --ui-scale 2),
+    // at most 40 % of the viewport.
+    const float k = ImGui::GetFontSize() / 13.0f;
+    float names = 0.0f;
+    for (const Layer& l : L.layers())
+        names = std::max(names, ImGui::CalcTextSize(l.name.c_str()).x);
+    ImGui::SetNextItemWidth(
+        std::min(names + ImGui::GetFrameHeight() + 2 * ImGui::GetStyle().FramePadding.x,
+                 0.4f * ImGui::GetContentRegionAvail().x));
     if (ImGui::BeginCombo("layer", s.layer_name.c_str())) {
         for (const Layer& l : L.layers())
             if (ImGui::Selectable(l.name.c_str(), l.name == s.layer_name)) {
@@ -139,13 +147,13 @@ void draw_viewport(Workbench::State& s) {
     if (layer->kind != LayerKind::Color) {
         if (ImGui::Checkbox("over colour", &s.overlay_on_color)) s.view_dirty = true;
         ImGui::SameLine();
-        ImGui::SetNextItemWidth(100);
+        ImGui::SetNextItemWidth(100 * k);
         ImGui::SliderFloat("opacity", &s.overlay_opacity, 0.0f, 1.0f);
         ImGui::SameLine();
         if (ImGui::Checkbox("fixed range", &s.fixed_range)) s.view_dirty = true;
         if (s.fixed_range) {
             ImGui::SameLine();
-            ImGui::SetNextItemWidth(140);
+            ImGui::SetNextItemWidth(140 * k);
             if (ImGui::InputFloat2("range", &s.range.lo)) s.view_dirty = true;
         }
     }

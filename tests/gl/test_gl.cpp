@@ -95,7 +95,28 @@ TEST(GlColormap, EachKindMatchesTheCpuColormap) {
                 << "colour x=" << x;
 }
 
-namespace {}  // namespace
+// A sparse layer (values only where a sample is) draws its no-data pixels transparent: over
+// colour they showed the colormap's 0 (issue "The workbench tells the truth"); a dense layer's
+// 0 is a value and stays opaque.
+TEST(GlColormap, SparseLayersNoDataIsTransparent) {
+    GlSession gl;
+    LayerView view;
+    LayerSet set(4, 1);
+    Layer& sparse = set.add("sampled", LayerKind::Categorical, 1);
+    sparse.sparse = true;
+    sparse.data = {0.0f, 1.0f, 0.0f, 2.0f};
+    Layer& dense = set.add("dense", LayerKind::Continuous, 1);
+    dense.data = {0.0f, 1.0f, 0.0f, 2.0f};
+    view.render(set, sparse, DisplayParams{});
+    std::vector<unsigned char> px = view.read_rgba();
+    EXPECT_EQ(px[0 * 4 + 3], 0);
+    EXPECT_EQ(px[2 * 4 + 3], 0);
+    EXPECT_EQ(px[1 * 4 + 3], 255);
+    EXPECT_EQ(px[3 * 4 + 3], 255);
+    view.render(set, dense, DisplayParams{});
+    px = view.read_rgba();
+    for (int x = 0; x < 4; ++x) EXPECT_EQ(px[size_t(x) * 4 + 3], 255) << x;
+}
 
 TEST(GlWorkbench, ColorbarHasTheColormapAndItsTicks) {
     GlSession gl;
