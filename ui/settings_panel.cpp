@@ -60,11 +60,17 @@ uint32_t draw_field(const SettingsSchema& schema, const SettingField& f, void* o
 
 }  // namespace
 
+float settings_label_width(const SettingsSchema& schema) {
+    float widest = 0.0f;
+    for (const SettingField& f : schema.fields())
+        widest = std::max(widest, ImGui::CalcTextSize(visible_label(f).c_str()).x);
+    return widest;
+}
+
 float settings_label_width(const SettingsGroup& group) {
     float widest = 0.0f;
     for (const SettingsGroup::Binding& b : group.bindings())
-        for (const SettingField& f : b.schema->fields())
-            widest = std::max(widest, ImGui::CalcTextSize(visible_label(f).c_str()).x);
+        widest = std::max(widest, settings_label_width(*b.schema));
     return widest;
 }
 

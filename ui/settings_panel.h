@@ -13,6 +13,7 @@ namespace freqlab::ui {
 uint32_t draw_settings(const SettingsGroup& group, bool open = true);
 // The widest label ("key (unit)") of the group's fields, in pixels of the current font.
 float settings_label_width(const SettingsGroup& group);
+float settings_label_width(const SettingsSchema& schema);
 // Sets the item width so that labels of `label_width` fit beside the widgets (pop with
 // ImGui::PopItemWidth).
 void push_label_room(float label_width);

@@ -169,12 +169,8 @@ void draw_settings_panel(Workbench::State& s) {
     // Every label of the panel fits: the settings' and the bake panel's media sliders.
     float labels = std::max(settings_label_width(s.config.settings_group()),
                             ImGui::CalcTextSize("density scale").x);
-    if (s.bake) {
-        BakeSettings shown = bake_session_file(s).settings;
-        SettingsGroup bake;
-        bake.bind(BakeSettings::schema(), &shown);
-        labels = std::max(labels, settings_label_width(bake));
-    }
+    // Labels depend on the declaration only: no copy of the session's settings per frame.
+    if (s.bake) labels = std::max(labels, settings_label_width(BakeSettings::schema()));
     push_label_room(labels);
     draw_settings_panel_items(s);
     ImGui::PopItemWidth();
