@@ -186,6 +186,9 @@ int run_bake(const BakeArgs& args) {
     }
 
     LightmapBaker baker(rays, media, tables.get(), method, settings);
+    if (cluster.rank() == 0)
+        for (const std::string& note : baker.stats().atlas_notes)
+            std::fprintf(stderr, "%s: %s\n", args.scene.c_str(), note.c_str());
     if (cluster.distributed()) {
         baker.set_share(cluster.rank(), cluster.size());
         cluster.set_work("texel rows and probes = " + std::to_string(cluster.rank()) + " mod " +
@@ -248,6 +251,7 @@ int run_bake(const BakeArgs& args) {
                       {"width", map.width},
                       {"height", map.height},
                       {"charts", map.charts},
+                      {"requested_density", map.requested_density},
                       {"texel_density", map.texel_density},
                       {"texels_valid", long(map.count(TexelState::Valid))},
                       {"texels_inside_geometry", long(map.count(TexelState::InsideGeometry))}};

@@ -215,6 +215,11 @@ void draw_bake_panel(Workbench::State& s) {
         ImGui::Text("%d / %d spp, %ld texels, %.0f ms", b.baker->samples(), b.settings.spp,
                     st.texels_valid, st.bake_ms);
         if (b.first_pass_ms >= 0.0) ImGui::Text("first preview after %.0f ms", b.first_pass_ms);
+        // Densities the atlas could not honour (volume/lightmap_atlas.h): said, not hidden.
+        ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.8f, 0.3f, 1.0f));
+        for (const std::string& note : st.atlas_notes)
+            ImGui::TextWrapped("atlas: %s", note.c_str());
+        ImGui::PopStyleColor();
     }
     if (restart) restart_bake(s);
 }

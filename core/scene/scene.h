@@ -19,6 +19,14 @@ namespace freqlab {
 
 enum class ShapeKind { Mesh, Sphere };
 
+// An object's own lightmap options (scene format "lightmap": false | {"density_scale": s,
+// "max_size": n}); method B's atlas builder reads them (volume/lightmap_atlas.h).
+struct LightmapOptions {
+    bool enabled = true;
+    float density_scale = 1.0f;  // x bake.texel_density
+    int max_size = 0;            // atlas side limit for this object; 0: bake.max_size
+};
+
 struct SceneObject {
     std::string name;
     ShapeKind shape = ShapeKind::Mesh;
@@ -27,6 +35,7 @@ struct SceneObject {
     int material = 0;                          // index into Scene::materials
     std::vector<int> group_material;           // per mesh group (material_map); empty: `material`
     Animation animation;
+    LightmapOptions lightmap;
 };
 
 struct Scene {

@@ -189,6 +189,21 @@ Camera read_camera(const JsonReader& r) {
     return cam;
 }
 
+// "lightmap": true | false | {"density_scale": s, "max_size": n}.
+LightmapOptions read_lightmap_options(const JsonReader& r) {
+    LightmapOptions l;
+    if (r.raw().is_boolean()) {
+        l.enabled = r.boolean();
+        return l;
+    }
+    if (!r.is_object()) r.fail("expected true, false or {\"density_scale\": s, \"max_size\": n}");
+    r.only_keys({"density_scale", "max_size"});
+    if (r.has("density_scale"))
+        l.density_scale = float(r.get("density_scale").number_in(0, 1e4, true));
+    if (r.has("max_size")) l.max_size = r.get("max_size").integer_in(16, 8192);
+    return l;
+}
+
 std::shared_ptr<const TriangleMesh> read_shape(const JsonReader& r, SceneObject& obj) {
     const std::string type = r.get("type").one_of({"plane", "box", "sphere", "disk", "torus"});
     auto positive = [&](const char* key, double fallback) {
@@ -319,8 +334,8 @@ Scene parse_scene(const std::string& text, const std::string& origin,
     // No objects is a scene too (an environment on its own): every method sees only misses.
     for (size_t i = 0; i < nobj; ++i) {
         const JsonReader o = objects.at(i);
-        o.only_keys(
-            {"name", "shape", "mesh", "material", "material_map", "transform", "animation"});
+        o.only_keys({"name", "shape", "mesh", "material", "material_map", "transform", "animation",
+                     "lightmap"});
         SceneObject obj;
         obj.name = o.has("name") ? o.get("name").string() : "object" + std::to_string(i);
         if (o.has("shape") == o.has("mesh"))
@@ -349,6 +364,7 @@ Scene parse_scene(const std::string& text, const std::string& origin,
             scene.materials.push_back(read_material(mat, obj.name, ctx));
         }
         if (o.has("transform")) obj.animation.base = read_trs(o.get("transform"));
+        if (o.has("lightmap")) obj.lightmap = read_lightmap_options(o.get("lightmap"));
         if (o.has("animation")) {
             const JsonReader a = o.get("animation");
             a.only_keys({"keyframes", "spin_axis", "spin_deg_per_s"});

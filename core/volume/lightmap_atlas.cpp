@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 
 #include <tbb/parallel_for.h>
@@ -16,6 +17,11 @@ size_t ObjectLightmap::count(TexelState s) const {
                                 [s](const LightmapTexel& t) { return t.state == s; }));
 }
 
+float ObjectLightmap::density_at(size_t texel) const {
+    const int t = texels[texel].triangle;
+    return t >= 0 ? chart_density[size_t(triangle_chart[size_t(t)])] : texel_density;
+}
+
 std::vector<std::string> texel_state_legend() {
     return {"empty", "valid", "inside geometry", "dilated"};
 }
@@ -26,6 +32,7 @@ struct Chart {
     std::vector<int> triangles;
     int axis = 2;                    // projection drops this world axis
     vec2 lo{1e30f}, hi{-1e30f};      // projected bounds (scene units)
+    float density = 0.0f;            // texels per unit granted
     int x = 0, y = 0, w = 0, h = 0;  // placement in texels, gutter included
 };
 
@@ -94,19 +101,20 @@ std::vector<Chart> make_charts(const TriangleMesh& mesh, const std::vector<vec3>
     return charts;
 }
 
-// Shelf packing, tallest first; returns the atlas size (width, height) or (0, 0) when a side
-// would exceed max_size.
-ivec2 pack(std::vector<Chart>& charts, float density, int padding, int max_size) {
+// Shelf packing, tallest first, each chart at its density x `scale`; returns the atlas size
+// (width, height) or (0, 0) when a side would exceed max_size.
+ivec2 pack(std::vector<Chart>& charts, float scale, int padding, int max_size) {
     double area = 0.0;
     for (Chart& c : charts) {
-        c.w = chart_cells(c.hi.x - c.lo.x, density) + 2 * padding;
-        c.h = chart_cells(c.hi.y - c.lo.y, density) + 2 * padding;
+        c.w = chart_cells(c.hi.x - c.lo.x, c.density * scale) + 2 * padding;
+        c.h = chart_cells(c.hi.y - c.lo.y, c.density * scale) + 2 * padding;
         area += double(c.w) * c.h;
     }
-    // Near-square atlases: the side holds the widest chart and ~15 % shelf waste.
+    // Near-square atlases: the side holds ~15 % shelf waste (a multiple of 4 up to the limit)
+    // and the widest chart.
     int width = std::max(4, int(std::ceil(std::sqrt(1.15 * area))));
+    width = std::min((width + 3) / 4 * 4, max_size);
     for (const Chart& c : charts) width = std::max(width, c.w);
-    width = (width + 3) / 4 * 4;
     if (width > max_size) return {0, 0};
     std::vector<int> order(charts.size());
     std::iota(order.begin(), order.end(), 0);
@@ -131,6 +139,7 @@ ivec2 pack(std::vector<Chart>& charts, float density, int padding, int max_size)
 }
 
 bool wants_lightmap(const Scene& scene, const SceneObject& o) {
+    if (!o.lightmap.enabled) return false;
     if (o.shape != ShapeKind::Mesh || !o.mesh || !o.animation.is_static()) return false;
     return scene.materials[o.material].type != BrdfType::Mirror;
 }
@@ -162,9 +171,150 @@ float backface_fraction(const RayScene& rs, const vec3& p, const vec3& n, int ra
     return float(back) / float(rays);
 }
 
+std::string density_text(float d) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.4g", double(d));
+    return buf;
+}
+
+// Each chart's density: the requested one where it fits; charts wider than the side at their
+// own; then, when the total overflows, every chart scaled by the largest common factor that
+// packs. Returns the atlas size ((0, 0): no density packs) and says each reduction.
+ivec2 choose_densities(std::vector<Chart>& charts, float requested, int side, int padding,
+                       std::vector<AtlasReduction>& reductions) {
+    const int room = side - 2 * padding;
+    if (room < 1) return {0, 0};
+    AtlasReduction wide{0, requested, requested, ""};
+    float widest = 0.0f;
+    for (Chart& c : charts) {
+        const float extent = std::max(c.hi.x - c.lo.x, c.hi.y - c.lo.y);
+        c.density = requested;
+        if (chart_cells(extent, requested) <= room) continue;
+        // extent x density <= room rounds to at most room cells.
+        c.density = float(room) / extent;
+        ++wide.charts;
+        wide.granted = std::min(wide.granted, c.density);
+        widest = std::max(widest, extent);
+    }
+    if (wide.charts > 0) {
+        wide.reason =
+            (wide.charts == 1 ? "a chart " : std::to_string(wide.charts) + " charts up to ") +
+            density_text(widest) + " units across would be wider than the " + std::to_string(side) +
+            "-texel atlas side";
+        reductions.push_back(wide);
+    }
+    ivec2 size = pack(charts, 1.0f, padding, side);
+    if (size.x > 0) return size;
+    // Bisection on the common factor: `fits` packs, `fails` does not.
+    float fits = 0.5f, fails = 1.0f;
+    while (pack(charts, fits, padding, side).x == 0) {
+        fails = fits;
+        fits *= 0.5f;
+        if (fits < 1e-7f) return {0, 0};  // not even a texel a chart fits
+    }
+    for (int i = 0; i < 24 && fails - fits > 1e-4f * fits; ++i) {
+        const float mid = 0.5f * (fits + fails);
+        (pack(charts, mid, padding, side).x > 0 ? fits : fails) = mid;
+    }
+    size = pack(charts, fits, padding, side);
+    for (Chart& c : charts) c.density *= fits;
+    for (AtlasReduction& r : reductions) r.granted *= fits;  // the wide charts shrink as well
+    reductions.push_back({int(charts.size()), requested, requested * fits,
+                          "the " + std::to_string(charts.size()) + " charts at " +
+                              density_text(requested) + " texels/unit would not pack into " +
+                              std::to_string(side) + " x " + std::to_string(side) + " texels"});
+    return size;
+}
+
+std::string object_label(const Scene& scene, int object) {
+    return "objects[" + std::to_string(object) + "] '" + scene.objects[size_t(object)].name + "'";
+}
+
 }  // namespace
 
-std::vector<ObjectLightmap> build_lightmaps(const RayScene& rs, const AtlasSettings& settings) {
+std::string reduction_note(const Scene& scene, const ObjectLightmap& map, const AtlasReduction& r) {
+    return object_label(scene, map.object) +
+           (map.page > 0 ? " (page " + std::to_string(map.page) + ")" : std::string()) +
+           ": lightmap at " + density_text(r.granted) + " texels/unit instead of the requested " +
+           density_text(r.requested) + " (factor " + density_text(r.granted / r.requested) + ", " +
+           std::to_string(r.charts) + " of " + std::to_string(map.charts) +
+           " charts): " + r.reason +
+           "; raise its lightmap.max_size (or bake.max_size) or lower its lightmap.density_scale";
+}
+
+namespace {
+
+// Texels of one page: each chart's triangles rasterised at the chart's density, then the
+// validity flags.
+void place_texels(const RayScene& rs, size_t oi, const std::vector<vec3>& world,
+                  const std::vector<Chart>& charts, const AtlasSettings& settings,
+                  ObjectLightmap& map) {
+    const Scene& scene = rs.scene();
+    const SceneObject& obj = scene.objects[oi];
+    const TriangleMesh& mesh = *obj.mesh;
+    const mat3 nm = glm::transpose(glm::inverse(mat3(rs.object_to_world(int(oi)))));
+    const ivec2 size(map.width, map.height);
+    const Material& material = scene.materials[obj.material];
+    tbb::parallel_for(size_t(0), charts.size(), [&](size_t ci) {
+        const Chart& c = charts[ci];
+        const float density = c.density;
+        const vec2 offset(chart_offset(c.hi.x - c.lo.x, density),
+                          chart_offset(c.hi.y - c.lo.y, density));
+        for (int t : c.triangles) {
+            const uvec3 tri = mesh.triangles[size_t(t)];
+            vec2 q[3];
+            for (int k = 0; k < 3; ++k) {
+                q[k] = (project(world[tri[k]], c.axis) - c.lo) * density +
+                       vec2(float(settings.padding)) + offset;
+                map.triangle_uv[size_t(t) * 3 + size_t(k)] = q[k] + vec2(c.x, c.y);
+            }
+            const vec2 lo = glm::min(q[0], glm::min(q[1], q[2]));
+            const vec2 hi = glm::max(q[0], glm::max(q[1], q[2]));
+            const float area =
+                (q[1].x - q[0].x) * (q[2].y - q[0].y) - (q[2].x - q[0].x) * (q[1].y - q[0].y);
+            if (std::abs(area) < 1e-12f) continue;
+            for (int y = std::max(0, int(std::floor(lo.y))); y <= int(hi.y) && y < c.h; ++y)
+                for (int x = std::max(0, int(std::floor(lo.x))); x <= int(hi.x) && x < c.w; ++x) {
+                    const vec2 pc(x + 0.5f, y + 0.5f);
+                    auto edge = [&](vec2 a, vec2 b) {
+                        return ((b.x - a.x) * (pc.y - a.y) - (pc.x - a.x) * (b.y - a.y)) / area;
+                    };
+                    const float w0 = edge(q[1], q[2]), w1 = edge(q[2], q[0]), w2 = edge(q[0], q[1]);
+                    if (w0 < -1e-6f || w1 < -1e-6f || w2 < -1e-6f) continue;
+                    LightmapTexel& tx = map.texels[size_t(c.y + y) * size.x + size_t(c.x + x)];
+                    if (tx.triangle >= 0) continue;  // a fold: the first triangle keeps it
+                    tx.triangle = t;
+                    tx.state = TexelState::Valid;
+                    tx.position = w0 * world[tri.x] + w1 * world[tri.y] + w2 * world[tri.z];
+                    vec3 n = glm::cross(world[tri.y] - world[tri.x], world[tri.z] - world[tri.x]);
+                    if (!mesh.normals.empty()) {
+                        const vec3 sn = nm * (w0 * mesh.normals[tri.x] + w1 * mesh.normals[tri.y] +
+                                              w2 * mesh.normals[tri.z]);
+                        if (glm::dot(sn, n) > 0.0f) n = sn;
+                    }
+                    tx.normal = glm::normalize(n);
+                    const vec2 uv = mesh.uvs.empty() ? vec2(0.0f)
+                                                     : w0 * mesh.uvs[tri.x] + w1 * mesh.uvs[tri.y] +
+                                                           w2 * mesh.uvs[tri.z];
+                    tx.albedo = material.albedo.eval(uv);
+                }
+        }
+    });
+    // Validity: texels inside closed geometry see mostly back faces.
+    tbb::parallel_for(size_t(0), map.texels.size(), [&](size_t i) {
+        LightmapTexel& tx = map.texels[i];
+        if (tx.state != TexelState::Valid) return;
+        const float f =
+            backface_fraction(rs, tx.position, tx.normal, settings.validity_rays,
+                              mix64(oi * 0x100000000ULL + (size_t(map.page) << 40) + i));
+        if (f > settings.backface_tolerance) tx.state = TexelState::InsideGeometry;
+    });
+}
+
+}  // namespace
+
+std::vector<ObjectLightmap> build_lightmaps(const RayScene& rs, const AtlasSettings& settings,
+                                            std::vector<std::string>* notes) {
     const Scene& scene = rs.scene();
     std::vector<ObjectLightmap> maps;
     for (size_t oi = 0; oi < scene.objects.size(); ++oi) {
@@ -172,85 +322,58 @@ std::vector<ObjectLightmap> build_lightmaps(const RayScene& rs, const AtlasSetti
         if (!wants_lightmap(scene, obj)) continue;
         const TriangleMesh& mesh = *obj.mesh;
         const mat4& m = rs.object_to_world(int(oi));
-        const mat3 nm = glm::transpose(glm::inverse(mat3(m)));
         std::vector<vec3> world(mesh.positions.size());
         for (size_t v = 0; v < world.size(); ++v)
             world[v] = vec3(m * vec4(mesh.positions[v], 1.0f));
-        std::vector<Chart> charts = make_charts(mesh, world);
-        float density = settings.texel_density;
-        ivec2 size = pack(charts, density, settings.padding, settings.max_size);
-        while (size.x == 0 && density > 1e-3f) {
-            density *= 0.8f;
-            size = pack(charts, density, settings.padding, settings.max_size);
+        const float requested = settings.texel_density * obj.lightmap.density_scale;
+        const int side = obj.lightmap.max_size > 0 ? obj.lightmap.max_size : settings.max_size;
+        // A chart wider than the side gets a page of its own, so that its reduction does not
+        // shrink the object's other charts.
+        std::vector<std::vector<Chart>> pages(1);
+        for (Chart& c : make_charts(mesh, world)) {
+            const float extent = std::max(c.hi.x - c.lo.x, c.hi.y - c.lo.y);
+            if (chart_cells(extent, requested) > side - 2 * settings.padding)
+                pages.push_back({std::move(c)});
+            else
+                pages[0].push_back(std::move(c));
         }
-        if (size.x == 0) continue;
-        ObjectLightmap map;
-        map.object = int(oi);
-        map.width = size.x;
-        map.height = size.y;
-        map.charts = int(charts.size());
-        map.texel_density = density;
-        map.texels.resize(size_t(size.x) * size.y);
-        map.triangle_uv.resize(mesh.triangles.size() * 3);
-        const Material& material = scene.materials[obj.material];
-        tbb::parallel_for(size_t(0), charts.size(), [&](size_t ci) {
-            const Chart& c = charts[ci];
-            const vec2 offset(chart_offset(c.hi.x - c.lo.x, density),
-                              chart_offset(c.hi.y - c.lo.y, density));
-            for (int t : c.triangles) {
-                const uvec3 tri = mesh.triangles[size_t(t)];
-                vec2 q[3];
-                for (int k = 0; k < 3; ++k) {
-                    q[k] = (project(world[tri[k]], c.axis) - c.lo) * density +
-                           vec2(float(settings.padding)) + offset;
-                    map.triangle_uv[size_t(t) * 3 + size_t(k)] = q[k] + vec2(c.x, c.y);
-                }
-                const vec2 lo = glm::min(q[0], glm::min(q[1], q[2]));
-                const vec2 hi = glm::max(q[0], glm::max(q[1], q[2]));
-                const float area =
-                    (q[1].x - q[0].x) * (q[2].y - q[0].y) - (q[2].x - q[0].x) * (q[1].y - q[0].y);
-                if (std::abs(area) < 1e-12f) continue;
-                for (int y = std::max(0, int(std::floor(lo.y))); y <= int(hi.y) && y < c.h; ++y)
-                    for (int x = std::max(0, int(std::floor(lo.x))); x <= int(hi.x) && x < c.w;
-                         ++x) {
-                        const vec2 pc(x + 0.5f, y + 0.5f);
-                        auto edge = [&](vec2 a, vec2 b) {
-                            return ((b.x - a.x) * (pc.y - a.y) - (pc.x - a.x) * (b.y - a.y)) / area;
-                        };
-                        const float w0 = edge(q[1], q[2]), w1 = edge(q[2], q[0]),
-                                    w2 = edge(q[0], q[1]);
-                        if (w0 < -1e-6f || w1 < -1e-6f || w2 < -1e-6f) continue;
-                        LightmapTexel& tx = map.texels[size_t(c.y + y) * size.x + size_t(c.x + x)];
-                        if (tx.triangle >= 0) continue;  // a fold: the first triangle keeps it
-                        tx.triangle = t;
-                        tx.state = TexelState::Valid;
-                        tx.position = w0 * world[tri.x] + w1 * world[tri.y] + w2 * world[tri.z];
-                        vec3 n =
-                            glm::cross(world[tri.y] - world[tri.x], world[tri.z] - world[tri.x]);
-                        if (!mesh.normals.empty()) {
-                            const vec3 sn =
-                                nm * (w0 * mesh.normals[tri.x] + w1 * mesh.normals[tri.y] +
-                                      w2 * mesh.normals[tri.z]);
-                            if (glm::dot(sn, n) > 0.0f) n = sn;
-                        }
-                        tx.normal = glm::normalize(n);
-                        const vec2 uv = mesh.uvs.empty()
-                                            ? vec2(0.0f)
-                                            : w0 * mesh.uvs[tri.x] + w1 * mesh.uvs[tri.y] +
-                                                  w2 * mesh.uvs[tri.z];
-                        tx.albedo = material.albedo.eval(uv);
-                    }
+        const size_t first_map = maps.size();
+        for (std::vector<Chart>& charts : pages) {
+            if (charts.empty()) continue;
+            ObjectLightmap map;
+            map.object = int(oi);
+            map.page = int(maps.size() - first_map);  // numbered among the pages made
+            map.requested_density = requested;
+            const ivec2 size =
+                choose_densities(charts, requested, side, settings.padding, map.reductions);
+            if (size.x == 0) {
+                if (notes)
+                    notes->push_back(object_label(scene, int(oi)) + ": no lightmap: its " +
+                                     std::to_string(charts.size()) + " charts do not fit " +
+                                     std::to_string(side) + " x " + std::to_string(side) +
+                                     " texels even at one texel each; raise its "
+                                     "lightmap.max_size");
+                continue;
             }
-        });
-        // Validity: texels inside closed geometry see mostly back faces.
-        tbb::parallel_for(size_t(0), map.texels.size(), [&](size_t i) {
-            LightmapTexel& tx = map.texels[i];
-            if (tx.state != TexelState::Valid) return;
-            const float f = backface_fraction(rs, tx.position, tx.normal, settings.validity_rays,
-                                              mix64(oi * 0x100000000ULL + i));
-            if (f > settings.backface_tolerance) tx.state = TexelState::InsideGeometry;
-        });
-        maps.push_back(std::move(map));
+            map.width = size.x;
+            map.height = size.y;
+            map.charts = int(charts.size());
+            map.texel_density = requested;
+            map.chart_density.resize(charts.size());
+            map.triangle_chart.assign(mesh.triangles.size(), -1);
+            for (size_t ci = 0; ci < charts.size(); ++ci) {
+                map.chart_density[ci] = charts[ci].density;
+                map.texel_density = std::min(map.texel_density, charts[ci].density);
+                for (int t : charts[ci].triangles) map.triangle_chart[size_t(t)] = int(ci);
+            }
+            if (notes)
+                for (const AtlasReduction& r : map.reductions)
+                    notes->push_back(reduction_note(scene, map, r));
+            map.texels.resize(size_t(size.x) * size.y);
+            map.triangle_uv.resize(mesh.triangles.size() * 3);
+            place_texels(rs, oi, world, charts, settings, map);
+            maps.push_back(std::move(map));
+        }
     }
     return maps;
 }
@@ -308,8 +431,22 @@ TriangleToTexels triangle_to_texels(const RayScene& rays, const ObjectLightmap& 
     return m;
 }
 
+LightmapLookup::LightmapLookup(const std::vector<ObjectLightmap>& maps, size_t object_count)
+    : maps_(&maps), maps_of_object_(object_count) {
+    for (size_t i = 0; i < maps.size(); ++i)
+        if (size_t(maps[i].object) < object_count)
+            maps_of_object_[size_t(maps[i].object)].push_back(int(i));
+}
+
+int LightmapLookup::find(int object, int triangle) const {
+    if (object < 0 || size_t(object) >= maps_of_object_.size()) return -1;
+    for (int m : maps_of_object_[size_t(object)])
+        if ((*maps_)[size_t(m)].holds(triangle)) return m;
+    return -1;
+}
+
 bool lightmap_uv(const RayScene& rays, const ObjectLightmap& map, const SurfaceHit& hit, vec2* uv) {
-    if (hit.primitive < 0 || size_t(hit.primitive) * 3 + 2 >= map.triangle_uv.size()) return false;
+    if (hit.object != map.object || !map.holds(hit.primitive)) return false;
     *uv = triangle_to_texels(rays, map, size_t(hit.primitive)).uv(hit.position);
     return true;
 }

@@ -29,7 +29,8 @@ nlohmann::json BakeStats::to_json() const {
             {"texels_invalid", texels_invalid},
             {"spp", samples},
             {"storage_mb", storage_mb},
-            {"peak_rss_mb", peak_rss_mb}};
+            {"peak_rss_mb", peak_rss_mb},
+            {"atlas_notes", atlas_notes}};
 }
 
 namespace {
@@ -45,7 +46,8 @@ double peak_rss_megabytes() {
 
 std::string lightmap_name(const Scene& scene, const ObjectLightmap& map) {
     const std::string& n = scene.objects[size_t(map.object)].name;
-    return n.empty() ? "object" + std::to_string(map.object) : n;
+    const std::string page = map.page > 0 ? "_page" + std::to_string(map.page) : "";
+    return (n.empty() ? "object" + std::to_string(map.object) : n) + page;
 }
 
 LightmapBaker::LightmapBaker(const RayScene& scene, const Media& media, const ImpulseTables* tables,
@@ -62,7 +64,7 @@ LightmapBaker::LightmapBaker(const RayScene& scene, const Media& media, const Im
     atlas.max_size = settings.max_size;
     atlas.padding = settings.padding;
     atlas.backface_tolerance = settings.backface_tolerance;
-    maps_ = build_lightmaps(scene, atlas);
+    maps_ = build_lightmaps(scene, atlas, &stats_.atlas_notes);
     stats_.atlas_ms = ms_since(t0);
     const vec3 lo = scene.bounds_min(), hi = scene.bounds_max();
     // A scene without geometry has no bounds to lay probes over: it gets none (and says so).

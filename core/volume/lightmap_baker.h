@@ -33,6 +33,8 @@ struct BakeStats {
     int samples = 0;
     double storage_mb = 0.0;   // the bake's own arrays (atlases, sums, probes)
     double peak_rss_mb = 0.0;  // the process's peak resident memory at the last pass's end
+    // Densities the atlases could not honour and objects left without one (build_lightmaps).
+    std::vector<std::string> atlas_notes;
     nlohmann::json to_json() const;
 };
 

@@ -32,8 +32,7 @@ LayerSet render_lightmap_preview(const RayScene& rs, const CameraPose& pose, int
                                  const std::vector<ObjectLightmap>& maps,
                                  const std::vector<LayerSet>& baked) {
     const Scene& scene = rs.scene();
-    std::vector<int> map_of(scene.objects.size(), -1);
-    for (size_t i = 0; i < maps.size(); ++i) map_of[size_t(maps[i].object)] = int(i);
+    const LightmapLookup lookup(maps, scene.objects.size());
     LayerSet out(width, height);
     Layer& color = out.add("color", LayerKind::Color, 3,
                            "the lightmapped scene: lm_total on baked surfaces, an unlit albedo "
@@ -58,9 +57,8 @@ LayerSet render_lightmap_preview(const RayScene& rs, const CameraPose& pose, int
                 for (int c = 0; c < 3; ++c) color.data[i * 3 + c] = bg[c];
                 continue;
             }
-            const int m = map_of[size_t(hit.object)];
-            if (m < 0 || hit.primitive < 0 ||
-                size_t(hit.primitive) * 3 + 2 >= maps[size_t(m)].triangle_uv.size()) {
+            const int m = lookup.find(hit.object, hit.primitive);
+            if (m < 0) {
                 const Material& mat = scene.materials[size_t(hit.material)];
                 const vec3 a = mat.albedo.eval(hit.uv) *
                                (0.2f + 0.8f * std::abs(glm::dot(hit.shading_normal, d)));

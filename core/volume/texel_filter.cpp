@@ -14,7 +14,7 @@ std::vector<size_t> texel_filter_neighbours(const ObjectLightmap& map,
     if (t.state != TexelState::Valid) return out;
     const int x0 = int(i % size_t(map.width)), y0 = int(i / size_t(map.width));
     // The window's diagonal in world units, with a margin for the chart's projection.
-    const float reach = 1.5f * float(radius + 1) * std::sqrt(2.0f) / map.texel_density;
+    const float reach = 1.5f * float(radius + 1) * std::sqrt(2.0f) / map.density_at(i);
     for (int y = std::max(0, y0 - radius); y <= std::min(map.height - 1, y0 + radius); ++y)
         for (int x = std::max(0, x0 - radius); x <= std::min(map.width - 1, x0 + radius); ++x) {
             const size_t j = size_t(y) * size_t(map.width) + size_t(x);

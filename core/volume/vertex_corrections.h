@@ -34,6 +34,7 @@
 // |                     | read light of up to depth - 1 more bounces than bake.bounces)    |
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "accel/ray_scene.h"
@@ -85,7 +86,8 @@ class VertexCorrectionField {
     const std::vector<ObjectLightmap>* maps_ = nullptr;
     std::vector<std::vector<TriangleToTexels>> triangles_;  // per map, per mesh triangle
     // (precomputed: a lookup is ~30 flops)
-    std::vector<int> map_of_object_;
+    std::vector<int> map_of_object_;          // its first page's map
+    std::unique_ptr<LightmapLookup> lookup_;  // further pages
     // Per map, per texel (dilated over empty texels): RGB of the emitters' terms, then RGB of
     // the surface light's, as half floats of value / scale (scale: the map's largest |value|,
     // so nothing overflows; relative precision 2^-11). A lookup is one random read, a cache
