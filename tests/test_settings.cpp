@@ -3,6 +3,7 @@
 
 #include "base/error.h"
 #include "render/frame_renderer.h"
+#include "settings/bake_settings.h"
 #include "settings/render_settings.h"
 #include "settings/settings_group.h"
 
@@ -79,4 +80,36 @@ TEST(Settings, JsonErrorsNameThePath) {
         EXPECT_EQ(e.field(), "settings.frame.width");
     }
     EXPECT_THROW(c.settings_group().from_json({{"nosuch", {}}}, "s.json", "settings"), Error);
+}
+
+// bake.quality is a preset: choosing it writes spp, bounces and texel_density; a later --set of
+// one of them wins, and in a JSON object the preset is applied before the fields beside it
+// whatever the key order.
+TEST(Settings, QualityPresetWritesItsFieldsAndExplicitValuesWin) {
+    const SettingsSchema& schema = BakeSettings::schema();
+    BakeSettings b;
+    schema.set_from_string(&b, "quality", "high", "test");
+    EXPECT_EQ(b.quality, BakeQuality::High);
+    EXPECT_EQ(b.spp, 128);
+    EXPECT_EQ(b.bounces, 4);
+    EXPECT_FLOAT_EQ(b.texel_density, 8.0f);
+    schema.set_from_string(&b, "spp", "20", "test");
+    EXPECT_EQ(b.spp, 20);
+    schema.set_from_string(&b, "quality", "low", "test");
+    EXPECT_EQ(b.spp, 16);
+    EXPECT_EQ(b.bounces, 2);
+    EXPECT_FLOAT_EQ(b.texel_density, 4.0f);
+    // "spp" sorts before "quality": the preset still goes first.
+    BakeSettings j;
+    schema.from_json(&j, nlohmann::json{{"spp", 20}, {"quality", "high"}}, "s.json", "bake");
+    EXPECT_EQ(j.spp, 20);
+    EXPECT_EQ(j.bounces, 4);
+    // custom writes nothing; the saved JSON reloads to the same values.
+    BakeSettings c = j;
+    schema.set_from_string(&c, "quality", "custom", "test");
+    EXPECT_EQ(c.spp, 20);
+    EXPECT_EQ(c.bounces, 4);
+    BakeSettings reloaded;
+    schema.from_json(&reloaded, schema.to_json(&j), "s.json", "bake");
+    EXPECT_EQ(schema.to_json(&reloaded), schema.to_json(&j));
 }

@@ -1,5 +1,7 @@
 #include "accel/ray_scene.h"
 
+#include <map>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -58,8 +60,22 @@ RayScene::RayScene(const Scene& scene, const EmbreeDevice& device)
     to_world_.resize(n);
     normal_to_world_.resize(n);
     to_object_.resize(n);
+    // Objects sharing one mesh (the loader reads a file once) share its BVH: instances.
+    std::map<const TriangleMesh*, RTCScene> built;
     for (size_t i = 0; i < n; ++i) {
         const SceneObject& obj = scene.objects[i];
+        if (obj.shape != ShapeKind::Sphere) {
+            auto it = built.find(obj.mesh.get());
+            if (it != built.end()) {
+                rtcRetainScene(it->second);
+                object_scenes_.push_back(it->second);
+                RTCGeometry inst = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
+                rtcSetGeometryInstancedScene(inst, it->second);
+                rtcAttachGeometryByID(top_, inst, unsigned(i));
+                instances_.push_back(inst);
+                continue;
+            }
+        }
         RTCScene s = rtcNewScene(device_);
         RTCGeometry g;
         if (obj.shape == ShapeKind::Sphere) {
@@ -88,6 +104,7 @@ RayScene::RayScene(const Scene& scene, const EmbreeDevice& device)
         rtcCommitScene(s);
         check(device_, ("building object " + obj.name).c_str());
         object_scenes_.push_back(s);
+        if (obj.shape != ShapeKind::Sphere) built[obj.mesh.get()] = s;
 
         RTCGeometry inst = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
         rtcSetGeometryInstancedScene(inst, s);

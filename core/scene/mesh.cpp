@@ -1,5 +1,9 @@
 #include "scene/mesh.h"
 
+#include <tbb/parallel_for.h>
+
+#include "math/noise.h"
+
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
@@ -139,6 +143,41 @@ TriangleMesh make_torus(float major, float minor, int segments, int sides) {
             const uint32_t a = i * (sides + 1) + j, b = (i + 1) * (sides + 1) + j;
             m.triangles.push_back({a, b, b + 1});
             m.triangles.push_back({a, b + 1, a + 1});
+        }
+    return m;
+}
+
+TriangleMesh make_terrain(const TerrainShape& t) {
+    TriangleMesh m;
+    const int nx = t.cells.x, ny = t.cells.y;
+    const size_t verts = size_t(nx + 1) * size_t(ny + 1);
+    m.positions.resize(verts);
+    m.normals.resize(verts);
+    m.uvs.resize(verts);
+    auto height = [&](double x, double y) {
+        return double(t.height) * (2.0 * fbm(t.seed, t.frequency, t.octaves, {x, y, 0.0}) - 1.0);
+    };
+    // The normal from central differences a tenth of a cell apart (the fBm's smoothstep is C1).
+    const double hx = 0.1 * double(t.size.x) / nx, hy = 0.1 * double(t.size.y) / ny;
+    tbb::parallel_for(0, ny + 1, [&](int j) {
+        for (int i = 0; i <= nx; ++i) {
+            const double x = (double(i) / nx - 0.5) * t.size.x,
+                         y = (double(j) / ny - 0.5) * t.size.y;
+            const size_t v = size_t(j) * size_t(nx + 1) + size_t(i);
+            m.positions[v] = vec3(float(x), float(y), float(height(x, y)));
+            const double dzdx = (height(x + hx, y) - height(x - hx, y)) / (2.0 * hx);
+            const double dzdy = (height(x, y + hy) - height(x, y - hy)) / (2.0 * hy);
+            m.normals[v] = vec3(glm::normalize(glm::dvec3(-dzdx, -dzdy, 1.0)));
+            m.uvs[v] = vec2(float(x / t.size.x + 0.5), float(y / t.size.y + 0.5)) * t.uv_scale;
+        }
+    });
+    m.triangles.reserve(size_t(nx) * size_t(ny) * 2);
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+            const uint32_t a = uint32_t(j * (nx + 1) + i), b = a + 1, c = a + uint32_t(nx + 1),
+                           d = c + 1;
+            m.triangles.push_back({a, b, d});
+            m.triangles.push_back({a, d, c});
         }
     return m;
 }

@@ -35,6 +35,20 @@ TriangleMesh make_box(vec3 size);                    // centred
 TriangleMesh make_disk(float radius, int segments);  // z = 0, normal +z
 TriangleMesh make_torus(float major, float minor, int segments, int sides);  // about z
 
+// A heightfield over [-size/2, size/2]^2 of cells.x x cells.y quads (2 triangles each): z =
+// height x (2 fbm(x, y) - 1) (math/noise.h: seed, frequency in cycles per unit, octaves), with
+// the analytic normals of that surface and uv = (x, y) / size x uv_scale.
+struct TerrainShape {
+    vec2 size{100.0f};
+    ivec2 cells{256};
+    float height = 2.0f;
+    double frequency = 0.05;
+    int octaves = 4;
+    uint32_t seed = 1;
+    float uv_scale = 1.0f;
+};
+TriangleMesh make_terrain(const TerrainShape& t);
+
 // All meshes of a file flattened into one (node transforms applied).
 TriangleMesh load_mesh_file(const std::filesystem::path& path, const std::string& origin,
                             const std::string& field);

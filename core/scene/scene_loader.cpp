@@ -53,6 +53,18 @@ struct LoadContext {
     std::string origin;
     fs::path dir;
     std::map<std::string, std::shared_ptr<const RgbImage>> images;
+    // Objects naming the same file share one mesh (a level instancing a house 12 times reads
+    // it once).
+    std::map<std::string, std::shared_ptr<const TriangleMesh>> meshes;
+
+    std::shared_ptr<const TriangleMesh> mesh(const JsonReader& field) {
+        const fs::path p = resolve_asset(field.string(), dir, origin, field.path());
+        auto it = meshes.find(p.string());
+        if (it != meshes.end()) return it->second;
+        auto m = std::make_shared<const TriangleMesh>(load_mesh_file(p, origin, field.path()));
+        meshes[p.string()] = m;
+        return m;
+    }
 
     std::shared_ptr<const RgbImage> image(const JsonReader& field) {
         const fs::path p = resolve_asset(field.string(), dir, origin, field.path());
@@ -205,7 +217,8 @@ LightmapOptions read_lightmap_options(const JsonReader& r) {
 }
 
 std::shared_ptr<const TriangleMesh> read_shape(const JsonReader& r, SceneObject& obj) {
-    const std::string type = r.get("type").one_of({"plane", "box", "sphere", "disk", "torus"});
+    const std::string type =
+        r.get("type").one_of({"plane", "box", "sphere", "disk", "torus", "terrain"});
     auto positive = [&](const char* key, double fallback) {
         return float(r.has(key) ? r.get(key).number_in(0, 1e9, true) : fallback);
     };
@@ -235,6 +248,27 @@ std::shared_ptr<const TriangleMesh> read_shape(const JsonReader& r, SceneObject&
         r.only_keys({"type", "radius", "segments"});
         mesh = make_disk(positive("radius", 1.0),
                          r.has("segments") ? r.get("segments").integer_in(3, 1 << 16) : 64);
+    } else if (type == "terrain") {
+        r.only_keys(
+            {"type", "size", "cells", "height", "frequency", "octaves", "seed", "uv_scale"});
+        TerrainShape t;
+        if (r.has("size")) {
+            const JsonReader s = r.get("size");
+            if (!s.is_array() || s.array_size() != 2) s.fail("expected [width, depth]");
+            t.size = vec2(float(s.at(0).number_in(0, 1e9, true)),
+                          float(s.at(1).number_in(0, 1e9, true)));
+        }
+        if (r.has("cells")) {
+            const JsonReader c = r.get("cells");
+            if (!c.is_array() || c.array_size() != 2) c.fail("expected [cells along x, along y]");
+            t.cells = ivec2(c.at(0).integer_in(1, 4096), c.at(1).integer_in(1, 4096));
+        }
+        t.height = float(r.number_or("height", t.height, 0, 1e9));
+        t.frequency = positive("frequency", t.frequency);
+        t.octaves = r.has("octaves") ? r.get("octaves").integer_in(1, 12) : t.octaves;
+        t.seed = r.has("seed") ? uint32_t(r.get("seed").integer_in(0, 1 << 30)) : t.seed;
+        t.uv_scale = positive("uv_scale", 1.0);
+        mesh = make_terrain(t);
     } else {
         r.only_keys({"type", "major", "minor", "segments", "sides"});
         mesh = make_torus(positive("major", 1.0), positive("minor", 0.25),
@@ -344,9 +378,7 @@ Scene parse_scene(const std::string& text, const std::string& origin,
         if (o.has("shape")) {
             obj.mesh = read_shape(o.get("shape"), obj);
         } else {
-            const JsonReader m = o.get("mesh");
-            obj.mesh = std::make_shared<TriangleMesh>(load_mesh_file(
-                resolve_asset(m.string(), ctx.dir, origin, m.path()), origin, m.path()));
+            obj.mesh = ctx.mesh(o.get("mesh"));
         }
         const JsonReader mat = o.get("material");
         if (mat.is_string()) {

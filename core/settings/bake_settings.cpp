@@ -130,6 +130,14 @@ const SettingsSchema& BakeSettings::schema() {
                    "Light probes along z.")
             .field(&BakeSettings::seed, "seed", 0, 1 << 30, "", kInvalidatesBake,
                    "Random seed of the bake (results never depend on the thread count).")
+            .preset(&BakeSettings::quality, "quality", {"custom", "low", "high"},
+                    {{},
+                     {{"spp", 16}, {"bounces", 2}, {"texel_density", 4}},
+                     {{"spp", 128}, {"bounces", 4}, {"texel_density", 8}}},
+                    kInvalidatesBake,
+                    "A production baker's two modes: choosing one writes the settings below "
+                    "(later --set or edits of them win; stats report the values used). custom "
+                    "writes nothing.")
             .build();
     return s;
 }

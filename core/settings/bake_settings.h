@@ -16,6 +16,8 @@ enum class Tracking { Exact, Ratio };
 enum class TexelMultiple { Walk, Tables };
 // Where impulse's in-scattered light of other surfaces at a texel comes from.
 enum class TexelSurfaceLight { Walk, Tables };
+// A preset of spp, bounces and texel density (BakeSettings::schema()).
+enum class BakeQuality { Custom, Low, High };
 
 struct BakeSettings {
     int spp = 64;            // paths per texel
@@ -58,6 +60,7 @@ struct BakeSettings {
     int seed = 0;
     // Light probes: a grid over the scene's bounds shrunk by 10 % (0 on any axis: none).
     int probes_x = 4, probes_y = 4, probes_z = 3;
+    BakeQuality quality = BakeQuality::Custom;  // the preset last chosen
     static const SettingsSchema& schema();
 };
 

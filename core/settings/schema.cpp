@@ -95,7 +95,14 @@ void SettingsSchema::from_json(void* object, const json& j, const std::string& f
     const std::string base = path.empty() ? prefix_ : path;
     if (!j.is_object())
         throw Error(file, base, "expected an object of settings (" + keys_list() + ")");
+    // Presets first: the fields they write take their own values from the object after them.
+    std::vector<std::pair<std::string, const json*>> ordered;
     for (const auto& [key, value] : j.items()) {
+        const SettingField* f = find(key);
+        ordered.emplace(f && f->is_preset ? ordered.begin() : ordered.end(), key, &value);
+    }
+    for (const auto& [key, value_ptr] : ordered) {
+        const json& value = *value_ptr;
         const std::string where = base + "." + key;
         const SettingField* f = find(key);
         if (!f) throw Error(file, where, "unknown setting; valid keys are: " + keys_list());

@@ -8,7 +8,9 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -41,6 +43,9 @@ struct SettingField {
     std::vector<std::string> choices;  // Choice: the names of values 0..n-1
     std::function<double(const void*)> get;
     std::function<void(void*, double)> set;
+    // A preset (SchemaBuilder::preset): setting it writes other fields, so a JSON object
+    // applies it before them and their own values there win.
+    bool is_preset = false;
 };
 
 class SettingsSchema {
@@ -118,6 +123,38 @@ class SchemaBuilder {
         f.get = [member](const void* o) { return double(int(static_cast<const S*>(o)->*member)); };
         f.set = [member](void* o, double v) { static_cast<S*>(o)->*member = E(int(v)); };
         add(std::move(f));
+        return *this;
+    }
+
+    // A named preset of fields declared before it: choosing names[i] stores i in `member` and
+    // writes values[i] ({key, value} of those fields; an empty list writes nothing). The
+    // tooltip lists what each name sets.
+    template <class E>
+    SchemaBuilder& preset(E S::*member, const std::string& key, std::vector<std::string> names,
+                          const std::vector<std::vector<std::pair<std::string, double>>>& values,
+                          uint32_t invalidates, const std::string& tooltip) {
+        std::vector<std::vector<std::function<void(void*)>>> writes(names.size());
+        std::string listing;
+        for (size_t i = 0; i < names.size() && i < values.size(); ++i) {
+            std::string line;
+            for (const auto& [k, v] : values[i]) {
+                const SettingField* other = schema_.find(k);
+                if (!other) throw std::logic_error("preset " + key + ": no field " + k);
+                auto set = other->set;
+                writes[i].push_back([set, v = v](void* o) { set(o, v); });
+                char buf[64];
+                std::snprintf(buf, sizeof buf, "%s%s %g", line.empty() ? "" : ", ", k.c_str(), v);
+                line += buf;
+            }
+            if (!line.empty()) listing += "\n" + names[i] + ": " + line;
+        }
+        choice(member, key, std::move(names), invalidates, tooltip + listing);
+        SettingField& f = static_cast<Access&>(schema_).fields_.back();
+        f.is_preset = true;
+        f.set = [member, writes](void* o, double v) {
+            static_cast<S*>(o)->*member = E(int(v));
+            for (const auto& w : writes[size_t(int(v))]) w(o);
+        };
         return *this;
     }
 
