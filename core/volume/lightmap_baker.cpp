@@ -21,6 +21,7 @@ nlohmann::json BakeStats::to_json() const {
               {"bake_ms", bake_ms},
               {"vertex_corrections_ms", corrections_ms}}},
             {"vertex_correction_paths", correction_paths},
+            {"vertex_correction_texels", correction_texels},
             {"rays", rays},
             {"impulse_queries", impulse_queries},
             {"nonfinite", guarded},
@@ -102,6 +103,7 @@ void LightmapBaker::reset() {
     corrections_.reset();
     stats_.corrections_ms = 0.0;
     stats_.correction_paths = 0;
+    stats_.correction_texels = 0;
     samples_ = 0;
     stats_.bake_ms = 0.0;
     stats_.rays = stats_.impulse_queries = stats_.guarded = 0;
@@ -119,6 +121,7 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
         estimator_.set_vertex_corrections(corrections_.get());
         stats_.corrections_ms = ms_since(t0);
         stats_.correction_paths = corrections_->paths_per_texel();
+        stats_.correction_texels = corrections_->computed_texels();
         stats_.rays += corrections_->rays();
     }
     long rows = 0;

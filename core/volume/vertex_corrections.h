@@ -81,6 +81,8 @@ class VertexCorrectionField {
     bool empty() const { return maps_ == nullptr; }
     int paths_per_texel() const { return paths_; }
     long rays() const { return rays_; }
+    // Texels whose prepass ran (the others took their neighbours' mean).
+    long computed_texels() const { return computed_; }
 
   private:
     const std::vector<ObjectLightmap>* maps_ = nullptr;
@@ -100,6 +102,7 @@ class VertexCorrectionField {
     std::vector<PackedMap> packed_;
     int paths_ = 0;
     long rays_ = 0;
+    long computed_ = 0;
     bool surface_light_ = false;
 };
 
