@@ -234,12 +234,12 @@ int run_bake(const BakeArgs& args) {
     const BakeKeyLight key = bake_key_light(rays);
     const json bake_provenance =
         output_provenance(scene, to_string(method), group.to_json(), long(settings.seed));
-    std::vector<LayerSet> baked;  // every lightmap's layers (the preview reads them too)
+    // Every lightmap's layers (the preview reads them too).
+    const std::vector<LayerSet> baked = baker.all_layers();
     for (size_t i = 0; i < baker.lightmaps().size(); ++i) {
         const ObjectLightmap& map = baker.lightmaps()[i];
         const std::string name = lightmap_name(scene, map);
-        baked.push_back(baker.layers(i));
-        const LayerSet& layers = baked.back();
+        const LayerSet& layers = baked[i];
         json provenance = bake_provenance;
         provenance["lightmap"] = name;
         write_exr(fs::path(args.out) / (name + ".exr"), layers, provenance);

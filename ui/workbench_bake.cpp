@@ -101,9 +101,7 @@ void start_bake(Workbench::State& s) {
         progress.set_stage_count(std::max(1, passes));
         for (int n = 1; bk.baker->samples() < bk.settings.spp; n *= 2) {
             bk.baker->run_pass(std::min(n, bk.settings.spp - bk.baker->samples()), &progress);
-            std::vector<LayerSet> baked;
-            for (size_t i = 0; i < bk.baker->lightmaps().size(); ++i)
-                baked.push_back(bk.baker->layers(i));
+            const std::vector<LayerSet> baked = bk.baker->all_layers();
             FrameResult r = preview_result(*sp, bk, baked);
             std::lock_guard<std::mutex> lock(sp->results_mutex);
             if (bk.first_pass_ms < 0.0) bk.first_pass_ms = ms_since(t0);
@@ -236,8 +234,7 @@ LayerSet vpt_preview(const Workbench::State& s, const BakeSession& b, int spp, u
     settings.seed = seed;
     LightmapBaker vpt(*b.rays, *b.media, nullptr, BakeMethod::Vpt, settings);
     vpt.run(&progress);
-    std::vector<LayerSet> baked;
-    for (size_t i = 0; i < vpt.lightmaps().size(); ++i) baked.push_back(vpt.layers(i));
+    const std::vector<LayerSet> baked = vpt.all_layers();
     const CameraPose pose = orbit_pose(s.scene.camera.at(0.0f), b.yaw, b.pitch, b.zoom);
     return render_lightmap_preview(*b.rays, pose, s.config.frame.width, s.config.frame.height,
                                    vpt.lightmaps(), baked);

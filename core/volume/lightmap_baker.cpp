@@ -45,6 +45,14 @@ double peak_rss_megabytes() {
 
 }  // namespace
 
+std::vector<LayerSet> LightmapBaker::all_layers() const {
+    // Reserved: a LayerSet (a deque of layers) is copied, not moved, when a vector grows.
+    std::vector<LayerSet> out;
+    out.reserve(maps_.size());
+    for (size_t i = 0; i < maps_.size(); ++i) out.push_back(layers(i));
+    return out;
+}
+
 std::string lightmap_name(const Scene& scene, const ObjectLightmap& map) {
     const std::string& n = scene.objects[size_t(map.object)].name;
     const std::string page = map.page > 0 ? "_page" + std::to_string(map.page) : "";

@@ -72,6 +72,8 @@ class LightmapBaker {
     nlohmann::json probes_json() const;  // grid, order, and per probe position + SH
     const std::vector<ObjectLightmap>& lightmaps() const { return maps_; }
     LayerSet layers(size_t lightmap) const;
+    // Every lightmap's layers, in lightmaps() order.
+    std::vector<LayerSet> all_layers() const;
     const BakeStats& stats() const { return stats_; }
     BakeMethod method() const { return method_; }
     const BakeEstimator& estimator() const { return estimator_; }
