@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include "base/error.h"
 #include "scene/json_reader.h"
@@ -45,6 +46,29 @@ TEST(Media, HomogeneousBoundsGiveClosedFormTransmittance) {
     EXPECT_NEAR(m.exit_distance(o, d), 10.0, 1e-5);
     const SegmentOptics s = m.integrate(o, d, 10.0);
     EXPECT_NEAR(s.effective().sigma_s, (0.5 * 2 + 0.2 * 4) / 10.0, 1e-9);
+}
+
+// A medium without bounds whose coefficients were dragged to 0 adds nothing to a segment to
+// infinity (a directional light's): 0 x inf is 0 here, not NaN (it made every path of such a
+// bake non-finite, the lightmap black).
+TEST(Media, ZeroCoefficientsAlongAnUnboundedSegmentAddNothing) {
+    Media m(media_from(R"([{"sigma_s": 0.3, "sigma_a": 0.1, "g": 0.2}])"));
+    m.set_coefficients(0, 0.0, 0.0, 0.2, 1.0);
+    const vec3 o(0.0f), d(0.0f, 0.0f, 1.0f);
+    const double inf = std::numeric_limits<double>::infinity();
+    const SegmentOptics s = m.integrate(o, d, inf);
+    EXPECT_EQ(s.tau_s, 0.0);
+    EXPECT_EQ(s.tau_a, 0.0);
+    EXPECT_EQ(s.tau_gs, 0.0);
+    EXPECT_EQ(m.transmittance(o, d, inf), 1.0);
+    CounterRng rng(1, 2, 3, 4);
+    EXPECT_EQ(m.track(o, d, inf, rng).transmittance(), 1.0);
+    // A density scale of 0 as well.
+    m.set_coefficients(0, 0.3, 0.1, 0.2, 0.0);
+    EXPECT_EQ(m.integrate(o, d, inf).tau_s, 0.0);
+    // And a medium that is there still extinguishes all of an unbounded segment.
+    m.set_coefficients(0, 0.3, 0.1, 0.2, 1.0);
+    EXPECT_EQ(m.transmittance(o, d, inf), 0.0);
 }
 
 TEST(Media, GridOpticalThicknessIsExactAgainstQuadrature) {

@@ -181,6 +181,7 @@ void draw_settings_panel_items(Workbench::State& s) {
     // What the loader changed in the input (dropped triangles, negative texels read as 0).
     ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.8f, 0.3f, 1.0f));
     for (const std::string& note : s.scene.load_notes) ImGui::TextWrapped("note: %s", note.c_str());
+    if (s.bake) draw_bake_notes(s);
     ImGui::PopStyleColor();
     if (s.bake) {
         draw_method_menu(s);

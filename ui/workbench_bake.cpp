@@ -139,6 +139,14 @@ void restart_bake(Workbench::State& s) {
     start_bake(s);
 }
 
+void draw_bake_notes(const Workbench::State& s) {
+    // Densities the atlases could not honour (volume/lightmap_atlas.h): said, not hidden (fixed
+    // when the baker is built).
+    if (!s.bake->baker) return;
+    for (const std::string& note : s.bake->baker->stats().atlas_notes)
+        ImGui::TextWrapped("atlas: %s", note.c_str());
+}
+
 void draw_bake_panel(Workbench::State& s) {
     BakeSession& b = *s.bake;
     if (b.job && b.job->done()) {
@@ -213,11 +221,6 @@ void draw_bake_panel(Workbench::State& s) {
         ImGui::Text("%d / %d spp, %ld texels, %.0f ms", b.baker->samples(), b.settings.spp,
                     st.texels_valid, st.bake_ms);
         if (b.first_pass_ms >= 0.0) ImGui::Text("first preview after %.0f ms", b.first_pass_ms);
-        // Densities the atlas could not honour (volume/lightmap_atlas.h): said, not hidden.
-        ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.8f, 0.3f, 1.0f));
-        for (const std::string& note : st.atlas_notes)
-            ImGui::TextWrapped("atlas: %s", note.c_str());
-        ImGui::PopStyleColor();
     }
     if (restart) restart_bake(s);
 }

@@ -110,6 +110,8 @@ void stop_bake_jobs(Workbench::State& s);
 // Starts the bake again after a change, dropping the VPT comparison of what was baked before.
 void restart_bake(Workbench::State& s);
 void draw_bake_panel(Workbench::State& s);
+// The bake's atlas notes (densities not honoured), in the notes' colour at the panel's top.
+void draw_bake_notes(const Workbench::State& s);
 // The inspector's record of a pixel of the lightmapped preview: its texel's trace.
 std::vector<std::string> bake_trace(Workbench::State& s, int x, int y);
 // Probes' SH lobes over the viewport image (call inside the viewport window).

@@ -296,11 +296,17 @@ HomogeneousMedium Media::at(const vec3& p) const {
 namespace {
 
 // A medium's share of a segment's optics from the integral of its (unscaled) density.
+// a x b where 0 x inf is 0: a medium whose coefficient (or density scale) is 0 adds nothing to
+// an unbounded segment (a slider dragged to 0 on a medium without bounds), not NaN.
+double times(double a, double b) {
+    return a == 0.0 || b == 0.0 ? 0.0 : a * b;
+}
+
 void add_medium(const MediumDesc& m, double density_length, SegmentOptics& s) {
-    const double scaled = density_length * m.density_scale;
-    s.tau_s += m.sigma_s * scaled;
-    s.tau_a += m.sigma_a * scaled;
-    s.tau_gs += m.g * m.sigma_s * scaled;
+    const double scaled = times(density_length, m.density_scale);
+    s.tau_s += times(m.sigma_s, scaled);
+    s.tau_a += times(m.sigma_a, scaled);
+    s.tau_gs += times(m.g * m.sigma_s, scaled);
 }
 
 }  // namespace
@@ -335,7 +341,7 @@ SegmentOptics Media::track(const vec3& o, const vec3& d, double t_max, CounterRn
         double density_length = 0.0;
         if (!e.grid) {
             density_length = t1 - t0;
-            s.tau_t_exact += mu * density_length;
+            s.tau_t_exact += times(mu, density_length);
         } else {
             const double rho_max = e.grid->max_value();
             const double rate = mu * rho_max;
