@@ -5,8 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 
 #include <tbb/parallel_for.h>
 
@@ -546,82 +544,4 @@ TEST(Bake, MethodListKeepsEverySeparator) {
     EXPECT_EQ(combo, std::string("surface\0extinction\0impulse\0vpt", 30));
     EXPECT_EQ(parse_bake_method("vpt"), BakeMethod::Vpt);
     EXPECT_THROW(parse_bake_method("walk"), Error);
-}
-
-namespace {
-
-// A 4 x 4 floor of 0.25-unit tiles, each its own chart (separate vertices), as an OBJ file.
-std::string tiled_floor_obj() {
-    const std::filesystem::path path = std::filesystem::temp_directory_path() / "freqlab_tiles.obj";
-    std::ofstream obj(path);
-    int v = 0;
-    for (int j = 0; j < 16; ++j)
-        for (int i = 0; i < 16; ++i) {
-            const float x0 = -2.0f + 0.25f * float(i), y0 = -2.0f + 0.25f * float(j);
-            obj << "v " << x0 << " " << y0 << " 0\nv " << x0 + 0.25f << " " << y0 << " 0\nv "
-                << x0 + 0.25f << " " << y0 + 0.25f << " 0\nv " << x0 << " " << y0 + 0.25f << " 0\n";
-            // Texture coordinates of its own: the loader does not join the tiles' corners.
-            const int t = 2 * (j * 16 + i);
-            obj << "vt " << t << " 0\nvt " << t + 1 << " 0\nvt " << t + 1 << " 1\nvt " << t
-                << " 1\n";
-            obj << "f " << v + 1 << "/" << v + 1 << " " << v + 2 << "/" << v + 2 << " " << v + 3
-                << "/" << v + 3 << "\nf " << v + 1 << "/" << v + 1 << " " << v + 3 << "/" << v + 3
-                << " " << v + 4 << "/" << v + 4 << "\n";
-            v += 4;
-        }
-    return path.string();
-}
-
-std::string tiles_scene(const std::string& floor) {
-    return R"({"frames": 1, "camera": {"position": [0, -5, 3], "look_at": [0, 0, 0]},
-      "materials": {"m": {"type": "lambert", "albedo": 0.7}},
-      "objects": [{"name": "floor", )" +
-           floor + R"(, "material": "m"},
-                  {"name": "box", "shape": {"type": "box", "size": [1, 1, 1]}, "material": "m",
-                   "transform": {"translate": [0.6, 0.3, 0.5]}}],
-      "lights": [{"type": "point", "position": [-0.5, -0.5, 2.0], "intensity": 8}],
-      "media": [{"sigma_s": 0.4, "sigma_a": 0.05, "g": 0.3,
-                 "bounds": {"box": {"min": [-2, -2, 0], "max": [2, 2, 2.5]}}}]})";
-}
-
-}  // namespace
-
-// The vertex correction field's prepass on charts too small to hold a computed texel (one
-// texel a tile): they take the computed texels near them in the world, so the prepass runs
-// about half the floor's texels (every chart alone: all of them; 92 texels run against 264), and
-// the box, whose bounce vertices read the floor's field, bakes what it bakes over a solid floor
-// (0.6797 against 0.6834).
-TEST(Bake, VertexCorrectionsOfTinyChartsComeFromTheirWorldNeighbours) {
-    Fixture tiles(tiles_scene(R"("mesh": ")" + tiled_floor_obj() + "\""));
-    Fixture solid(tiles_scene(R"("shape": {"type": "plane", "size": [4, 4]})"));
-    const ImpulseTables& tables = test_support::shared_impulse_tables();
-    BakeSettings s;
-    s.spp = 64;
-    s.bounces = 1;
-    s.texel_density = 4.0f;
-    s.texel_mc_rate = 0.25f;
-    s.probes_x = 0;
-    LightmapBaker tiled(*tiles.rays, tiles.media, &tables, BakeMethod::Impulse, s);
-    tiled.run();
-    ASSERT_EQ(tiled.lightmaps()[0].charts, 256);
-    const long floor_texels = long(tiled.lightmaps()[0].count(TexelState::Valid));
-    const long box_texels = long(tiled.lightmaps()[1].count(TexelState::Valid));
-    // One texel a tile; the 16 under the box lie inside it.
-    EXPECT_EQ(floor_texels + long(tiled.lightmaps()[0].count(TexelState::InsideGeometry)), 256);
-    // The box's 5 visible faces run a quarter of their texels (+ edge strips).
-    EXPECT_LT(tiled.stats().correction_texels, long(0.6 * double(floor_texels)) + box_texels);
-    LightmapBaker plain(*solid.rays, solid.media, &tables, BakeMethod::Impulse, s);
-    plain.run();
-    auto box_mean = [](const LightmapBaker& b) {
-        const LayerSet l = b.layers(1);
-        const Layer& e = l.get("lm_irradiance");
-        const ObjectLightmap& m = b.lightmaps()[1];
-        double sum = 0.0;
-        long n = 0;
-        for (size_t i = 0; i < m.texels.size(); ++i)
-            if (m.texels[i].state == TexelState::Valid) sum += e.data[i * 3], ++n;
-        return sum / double(n);
-    };
-    const double a = box_mean(tiled), b = box_mean(plain);
-    EXPECT_NEAR(a, b, 0.02 * b) << "tiled floor " << a << ", solid floor " << b;
 }

@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <unordered_map>
 
 #include "volume/bake_estimators.h"
 #include "volume/lightmap_baker.h"
@@ -55,48 +54,6 @@ void filter_multiple(const ObjectLightmap& map, const std::vector<char>& done,
         }
     for (size_t i = 0; i < deferred.size(); ++i)
         if (done[i]) deferred[i].multiple = filtered[i];
-}
-
-// Computed texels within `stride` texels (world distance) of each missing one, with a normal
-// within 26 degrees and on its plane to a quarter of that distance: its sources. Returns the
-// texels that still have none.
-std::vector<size_t> world_sources(const ObjectLightmap& map, const std::vector<char>& done,
-                                  int stride, const std::vector<size_t>& missing,
-                                  std::vector<std::vector<size_t>>& sources) {
-    if (missing.empty()) return {};
-    const float reach = float(stride) / map.texel_density;
-    auto key = [&](const vec3& p) {
-        const ivec3 c = ivec3(glm::floor(p / reach));
-        return (int64_t(c.x) * 73856093) ^ (int64_t(c.y) * 19349663) ^ (int64_t(c.z) * 83492791);
-    };
-    std::unordered_map<int64_t, std::vector<size_t>> cells;
-    for (size_t j = 0; j < done.size(); ++j)
-        if (done[j]) cells[key(map.texels[j].position)].push_back(j);
-    std::vector<char> still(missing.size(), 0);
-    tbb::parallel_for(size_t(0), missing.size(), [&](size_t k) {
-        const size_t i = missing[k];
-        const LightmapTexel& t = map.texels[i];
-        for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    auto it = cells.find(key(t.position + reach * vec3(dx, dy, dz)));
-                    if (it == cells.end()) continue;
-                    for (size_t j : it->second) {
-                        const LightmapTexel& u = map.texels[j];
-                        const vec3 d = u.position - t.position;
-                        if (glm::dot(d, d) <= reach * reach &&
-                            std::abs(glm::dot(d, t.normal)) <= 0.25f * reach &&
-                            glm::dot(u.normal, t.normal) > 0.9f &&
-                            std::find(sources[i].begin(), sources[i].end(), j) == sources[i].end())
-                            sources[i].push_back(j);
-                    }
-                }
-        still[k] = sources[i].empty();
-    });
-    std::vector<size_t> out;
-    for (size_t k = 0; k < missing.size(); ++k)
-        if (still[k]) out.push_back(missing[k]);
-    return out;
 }
 
 }  // namespace
@@ -178,10 +135,6 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
                 }
             if (sources[i].empty()) missing.push_back(i);
         }
-        // A texel of a chart too small for a computed one in its window (an IFC house: 3589
-        // charts of ~9 texels) takes those near it in the world on its plane; only what has
-        // none runs itself.
-        missing = world_sources(map, done, stride, missing, sources);
         tbb::parallel_for(size_t(0), missing.size(), [&](size_t k) { run(missing[k]); });
         for (size_t i = 0; i < n; ++i) {
             if (sources[i].empty()) continue;
