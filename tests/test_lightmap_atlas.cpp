@@ -35,6 +35,16 @@ double texel_spacing(const ObjectLightmap& map) {
     return 0.0;
 }
 
+// The atlases at `density` texels per unit (bake.max_size's default 1024), 4 validity rays.
+std::vector<ObjectLightmap> atlases(const Fixture& f, float density,
+                                    std::vector<std::string>& notes) {
+    AtlasSettings a;
+    a.texel_density = density;
+    a.max_size = 1024;
+    a.validity_rays = 4;
+    return build_lightmaps(*f.rays, a, &notes);
+}
+
 bool contains(const std::string& text, const std::string& part) {
     return text.find(part) != std::string::npos;
 }
@@ -63,12 +73,8 @@ std::string level_scene() {
 
 TEST(LightmapAtlas, AHugeGroundPlaneGetsAPageOfItsOwnAndTheRestKeepsTheRequestedDensity) {
     Fixture f(level_scene());
-    AtlasSettings a;
-    a.texel_density = 32.0f;
-    a.max_size = 1024;
-    a.validity_rays = 4;
     std::vector<std::string> notes;
-    const std::vector<ObjectLightmap> maps = build_lightmaps(*f.rays, a, &notes);
+    const std::vector<ObjectLightmap> maps = atlases(f, 32.0f, notes);
     ASSERT_EQ(maps.size(), 2u);
     const ObjectLightmap& props = maps[0];
     const ObjectLightmap& ground = maps[1];
@@ -121,11 +127,8 @@ TEST(LightmapAtlas, ChartsThatOverflowTheAtlasShareOneReducedDensityAndItIsSaid)
       "objects": [{"name": "crate", "shape": {"type": "box", "size": [1, 1, 1]}, "material": "m",
                    "lightmap": {"max_size": 40}}],
       "lights": [{"type": "point", "position": [0, 0, 3], "intensity": 1}]})");
-    AtlasSettings a;
-    a.texel_density = 16.0f;
-    a.validity_rays = 4;
     std::vector<std::string> notes;
-    const std::vector<ObjectLightmap> maps = build_lightmaps(*f.rays, a, &notes);
+    const std::vector<ObjectLightmap> maps = atlases(f, 16.0f, notes);
     ASSERT_EQ(maps.size(), 1u);
     const ObjectLightmap& m = maps[0];
     EXPECT_LE(m.width, 40);
@@ -152,11 +155,8 @@ TEST(LightmapAtlas, ObjectOptionsOptOutScaleAndCap) {
                   {"name": "fine", "shape": {"type": "plane", "size": [2, 2]}, "material": "m",
                    "transform": {"translate": [-5, 0, 0]}, "lightmap": true}],
       "lights": [{"type": "point", "position": [0, 0, 3], "intensity": 1}]})");
-    AtlasSettings a;
-    a.texel_density = 16.0f;
-    a.validity_rays = 4;
     std::vector<std::string> notes;
-    const std::vector<ObjectLightmap> maps = build_lightmaps(*f.rays, a, &notes);
+    const std::vector<ObjectLightmap> maps = atlases(f, 16.0f, notes);
     ASSERT_EQ(maps.size(), 2u);  // "skip" has none
     EXPECT_EQ(maps[0].object, 1);
     EXPECT_EQ(maps[1].object, 2);

@@ -52,6 +52,37 @@ EmbreeDevice::~EmbreeDevice() {
     rtcReleaseDevice(device_);
 }
 
+RTCScene RayScene::build_object_scene(const SceneObject& obj) const {
+    RTCScene s = rtcNewScene(device_);
+    RTCGeometry g;
+    if (obj.shape == ShapeKind::Sphere) {
+        g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+        float* p = static_cast<float*>(rtcSetNewGeometryBuffer(
+            g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
+        p[0] = p[1] = p[2] = 0.0f;
+        p[3] = obj.sphere_radius;
+    } else {
+        const TriangleMesh& m = *obj.mesh;
+        g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+        float* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                               RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                               m.positions.size()));
+        for (size_t k = 0; k < m.positions.size(); ++k)
+            for (int c = 0; c < 3; ++c) v[3 * k + c] = m.positions[k][c];
+        unsigned* idx = static_cast<unsigned*>(
+            rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                    3 * sizeof(unsigned), m.triangles.size()));
+        for (size_t k = 0; k < m.triangles.size(); ++k)
+            for (int c = 0; c < 3; ++c) idx[3 * k + c] = m.triangles[k][c];
+    }
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(s, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(s);
+    check(device_, ("building object " + obj.name).c_str());
+    return s;
+}
+
 RayScene::RayScene(const Scene& scene, const EmbreeDevice& device)
     : scene_(scene), device_(device.handle()) {
     top_ = rtcNewScene(device_);
@@ -64,48 +95,17 @@ RayScene::RayScene(const Scene& scene, const EmbreeDevice& device)
     std::map<const TriangleMesh*, RTCScene> built;
     for (size_t i = 0; i < n; ++i) {
         const SceneObject& obj = scene.objects[i];
-        if (obj.shape != ShapeKind::Sphere) {
-            auto it = built.find(obj.mesh.get());
-            if (it != built.end()) {
-                rtcRetainScene(it->second);
-                object_scenes_.push_back(it->second);
-                RTCGeometry inst = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
-                rtcSetGeometryInstancedScene(inst, it->second);
-                rtcAttachGeometryByID(top_, inst, unsigned(i));
-                instances_.push_back(inst);
-                continue;
-            }
-        }
-        RTCScene s = rtcNewScene(device_);
-        RTCGeometry g;
-        if (obj.shape == ShapeKind::Sphere) {
-            g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-            float* p = static_cast<float*>(rtcSetNewGeometryBuffer(
-                g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 1));
-            p[0] = p[1] = p[2] = 0.0f;
-            p[3] = obj.sphere_radius;
+        const bool shareable = obj.shape != ShapeKind::Sphere;
+        auto it = shareable ? built.find(obj.mesh.get()) : built.end();
+        RTCScene s;
+        if (it != built.end()) {
+            s = it->second;
+            rtcRetainScene(s);
         } else {
-            const TriangleMesh& m = *obj.mesh;
-            g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-            float* v = static_cast<float*>(
-                rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                        3 * sizeof(float), m.positions.size()));
-            for (size_t k = 0; k < m.positions.size(); ++k)
-                for (int c = 0; c < 3; ++c) v[3 * k + c] = m.positions[k][c];
-            unsigned* idx = static_cast<unsigned*>(
-                rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                        3 * sizeof(unsigned), m.triangles.size()));
-            for (size_t k = 0; k < m.triangles.size(); ++k)
-                for (int c = 0; c < 3; ++c) idx[3 * k + c] = m.triangles[k][c];
+            s = build_object_scene(obj);
+            if (shareable) built[obj.mesh.get()] = s;
         }
-        rtcCommitGeometry(g);
-        rtcAttachGeometry(s, g);
-        rtcReleaseGeometry(g);
-        rtcCommitScene(s);
-        check(device_, ("building object " + obj.name).c_str());
         object_scenes_.push_back(s);
-        if (obj.shape != ShapeKind::Sphere) built[obj.mesh.get()] = s;
-
         RTCGeometry inst = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
         rtcSetGeometryInstancedScene(inst, s);
         rtcAttachGeometryByID(top_, inst, unsigned(i));

@@ -108,6 +108,8 @@ class RayScene {
     const Scene& scene_;
     RTCDevice device_;
     RTCScene top_ = nullptr;
+    // One object's geometry in a committed scene of its own (instanced in top_).
+    RTCScene build_object_scene(const SceneObject& obj) const;
     std::vector<RTCScene> object_scenes_;
     std::vector<RTCGeometry> instances_;
     std::vector<mat4> to_world_, normal_to_world_, to_object_;

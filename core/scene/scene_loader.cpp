@@ -216,6 +216,14 @@ LightmapOptions read_lightmap_options(const JsonReader& r) {
     return l;
 }
 
+// A flat shape's optional "size": [width, depth], both > 0.
+vec2 width_depth_or(const JsonReader& r, vec2 fallback) {
+    if (!r.has("size")) return fallback;
+    const JsonReader s = r.get("size");
+    if (!s.is_array() || s.array_size() != 2) s.fail("expected [width, depth]");
+    return vec2(float(s.at(0).number_in(0, 1e9, true)), float(s.at(1).number_in(0, 1e9, true)));
+}
+
 std::shared_ptr<const TriangleMesh> read_shape(const JsonReader& r, SceneObject& obj) {
     const std::string type =
         r.get("type").one_of({"plane", "box", "sphere", "disk", "torus", "terrain"});
@@ -230,14 +238,7 @@ std::shared_ptr<const TriangleMesh> read_shape(const JsonReader& r, SceneObject&
         return nullptr;
     } else if (type == "plane") {
         r.only_keys({"type", "size", "uv_scale"});
-        vec2 size(10.0f);
-        if (r.has("size")) {
-            const JsonReader s = r.get("size");
-            if (!s.is_array() || s.array_size() != 2) s.fail("expected [width, depth]");
-            size = vec2(float(s.at(0).number_in(0, 1e9, true)),
-                        float(s.at(1).number_in(0, 1e9, true)));
-        }
-        mesh = make_plane(size, positive("uv_scale", 1.0));
+        mesh = make_plane(width_depth_or(r, vec2(10.0f)), positive("uv_scale", 1.0));
     } else if (type == "box") {
         r.only_keys({"type", "size"});
         const vec3 size = r.vector3_or("size", vec3(1.0f));
@@ -252,12 +253,7 @@ std::shared_ptr<const TriangleMesh> read_shape(const JsonReader& r, SceneObject&
         r.only_keys(
             {"type", "size", "cells", "height", "frequency", "octaves", "seed", "uv_scale"});
         TerrainShape t;
-        if (r.has("size")) {
-            const JsonReader s = r.get("size");
-            if (!s.is_array() || s.array_size() != 2) s.fail("expected [width, depth]");
-            t.size = vec2(float(s.at(0).number_in(0, 1e9, true)),
-                          float(s.at(1).number_in(0, 1e9, true)));
-        }
+        t.size = width_depth_or(r, t.size);
         if (r.has("cells")) {
             const JsonReader c = r.get("cells");
             if (!c.is_array() || c.array_size() != 2) c.fail("expected [cells along x, along y]");

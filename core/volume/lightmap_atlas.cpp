@@ -230,20 +230,6 @@ std::string object_label(const Scene& scene, int object) {
     return "objects[" + std::to_string(object) + "] '" + scene.objects[size_t(object)].name + "'";
 }
 
-}  // namespace
-
-std::string reduction_note(const Scene& scene, const ObjectLightmap& map, const AtlasReduction& r) {
-    return object_label(scene, map.object) +
-           (map.page > 0 ? " (page " + std::to_string(map.page) + ")" : std::string()) +
-           ": lightmap at " + density_text(r.granted) + " texels/unit instead of the requested " +
-           density_text(r.requested) + " (factor " + density_text(r.granted / r.requested) + ", " +
-           std::to_string(r.charts) + " of " + std::to_string(map.charts) +
-           " charts): " + r.reason +
-           "; raise its lightmap.max_size (or bake.max_size) or lower its lightmap.density_scale";
-}
-
-namespace {
-
 // Texels of one page: each chart's triangles rasterised at the chart's density, then the
 // validity flags.
 void place_texels(const RayScene& rs, size_t oi, const std::vector<vec3>& world,
@@ -312,6 +298,16 @@ void place_texels(const RayScene& rs, size_t oi, const std::vector<vec3>& world,
 }
 
 }  // namespace
+
+std::string reduction_note(const Scene& scene, const ObjectLightmap& map, const AtlasReduction& r) {
+    return object_label(scene, map.object) +
+           (map.page > 0 ? " (page " + std::to_string(map.page) + ")" : std::string()) +
+           ": lightmap at " + density_text(r.granted) + " texels/unit instead of the requested " +
+           density_text(r.requested) + " (factor " + density_text(r.granted / r.requested) + ", " +
+           std::to_string(r.charts) + " of " + std::to_string(map.charts) +
+           " charts): " + r.reason +
+           "; raise its lightmap.max_size (or bake.max_size) or lower its lightmap.density_scale";
+}
 
 std::vector<ObjectLightmap> build_lightmaps(const RayScene& rs, const AtlasSettings& settings,
                                             std::vector<std::string>* notes) {

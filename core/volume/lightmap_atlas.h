@@ -79,11 +79,12 @@ struct ObjectLightmap {
 // Which lightmap (index into build_lightmaps' result) holds a triangle of an object.
 class LightmapLookup {
   public:
+    LightmapLookup() = default;  // finds nothing
     LightmapLookup(const std::vector<ObjectLightmap>& maps, size_t object_count);
     int find(int object, int triangle) const;  // -1: none
 
   private:
-    const std::vector<ObjectLightmap>* maps_;
+    const std::vector<ObjectLightmap>* maps_ = nullptr;
     std::vector<std::vector<int>> maps_of_object_;
 };
 

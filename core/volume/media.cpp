@@ -295,13 +295,13 @@ HomogeneousMedium Media::at(const vec3& p) const {
 
 namespace {
 
-// A medium's share of a segment's optics from the integral of its (unscaled) density.
 // a x b where 0 x inf is 0: a medium whose coefficient (or density scale) is 0 adds nothing to
 // an unbounded segment (a slider dragged to 0 on a medium without bounds), not NaN.
 double times(double a, double b) {
     return a == 0.0 || b == 0.0 ? 0.0 : a * b;
 }
 
+// A medium's share of a segment's optics from the integral of its (unscaled) density.
 void add_medium(const MediumDesc& m, double density_length, SegmentOptics& s) {
     const double scaled = times(density_length, m.density_scale);
     s.tau_s += times(m.sigma_s, scaled);

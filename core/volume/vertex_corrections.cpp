@@ -84,13 +84,14 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
         1,
         int(std::ceil(double(settings.spp) * settings.texel_mc_rate * kFieldPathFraction - 1e-9)));
     map_of_object_.assign(rays.scene().objects.size(), -1);
-    lookup_ = std::make_unique<LightmapLookup>(maps, rays.scene().objects.size());
+    lookup_ = LightmapLookup(maps, rays.scene().objects.size());
     packed_.resize(maps.size());
     triangles_.resize(maps.size());
     std::atomic<long> rays_cast{0}, computed{0};
     for (size_t mi = 0; mi < maps.size(); ++mi) {
         const ObjectLightmap& map = maps[mi];
-        if (map.page == 0) map_of_object_[size_t(map.object)] = int(mi);
+        int& of_object = map_of_object_[size_t(map.object)];
+        of_object = of_object == -1 ? int(mi) : kSeveralPages;
         triangles_[mi].resize(map.triangle_uv.size() / 3);
         for (size_t t = 0; t < triangles_[mi].size(); ++t)
             triangles_[mi][t] = triangle_to_texels(rays, map, t);
@@ -176,8 +177,7 @@ VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit
     Texel texel;
     if (!maps_ || hit.object < 0 || size_t(hit.object) >= map_of_object_.size()) return texel;
     int mi = map_of_object_[size_t(hit.object)];
-    if (mi < 0 || !(*maps_)[size_t(mi)].holds(hit.primitive))
-        mi = lookup_->find(hit.object, hit.primitive);
+    if (mi == kSeveralPages) mi = lookup_.find(hit.object, hit.primitive);
     if (mi < 0) return texel;
     const std::vector<TriangleToTexels>& tris = triangles_[size_t(mi)];
     if (hit.primitive < 0 || size_t(hit.primitive) >= tris.size()) return texel;

@@ -34,7 +34,6 @@
 // |                     | read light of up to depth - 1 more bounces than bake.bounces)    |
 #pragma once
 
-#include <memory>
 #include <vector>
 
 #include "accel/ray_scene.h"
@@ -88,8 +87,11 @@ class VertexCorrectionField {
     const std::vector<ObjectLightmap>* maps_ = nullptr;
     std::vector<std::vector<TriangleToTexels>> triangles_;  // per map, per mesh triangle
     // (precomputed: a lookup is ~30 flops)
-    std::vector<int> map_of_object_;          // its first page's map
-    std::unique_ptr<LightmapLookup> lookup_;  // further pages
+    // Per object: its map, -1 none, kSeveralPages: ask lookup_ (pages, volume/lightmap_atlas.h),
+    // so that an object of one map costs the hot path no more than before pages.
+    static constexpr int kSeveralPages = -2;
+    std::vector<int> map_of_object_;
+    LightmapLookup lookup_;
     // Per map, per texel (dilated over empty texels): RGB of the emitters' terms, then RGB of
     // the surface light's, as half floats of value / scale (scale: the map's largest |value|,
     // so nothing overflows; relative precision 2^-11). A lookup is one random read, a cache
