@@ -340,7 +340,7 @@ Scene parse_scene(const std::string& text, const std::string& origin,
     const json doc = JsonReader::parse(text, origin);
     const JsonReader root(doc, origin, "");
     root.only_keys({"name", "fps", "frames", "camera", "materials", "objects", "lights", "media"});
-    LoadContext ctx{origin, scene_dir, {}};
+    LoadContext ctx{origin, scene_dir, {}, {}};
     Scene scene;
     scene.source = origin;
     scene.content_hash = fnv1a(text);
