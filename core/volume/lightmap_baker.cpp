@@ -22,6 +22,7 @@ nlohmann::json BakeStats::to_json() const {
               {"vertex_corrections_ms", corrections_ms}}},
             {"vertex_correction_paths", correction_paths},
             {"vertex_correction_texels", correction_texels},
+            {"vertex_correction_straddling_texels", correction_straddling},
             {"rays", rays},
             {"impulse_queries", impulse_queries},
             {"nonfinite", guarded},
@@ -112,6 +113,7 @@ void LightmapBaker::reset() {
     stats_.corrections_ms = 0.0;
     stats_.correction_paths = 0;
     stats_.correction_texels = 0;
+    stats_.correction_straddling = 0;
     samples_ = 0;
     stats_.bake_ms = 0.0;
     stats_.rays = stats_.impulse_queries = stats_.guarded = 0;
@@ -130,6 +132,7 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
         stats_.corrections_ms = ms_since(t0);
         stats_.correction_paths = corrections_->paths_per_texel();
         stats_.correction_texels = corrections_->computed_texels();
+        stats_.correction_straddling = corrections_->straddling_texels();
         stats_.rays += corrections_->rays();
     }
     long rows = 0;

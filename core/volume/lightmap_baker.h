@@ -26,9 +26,10 @@ namespace freqlab {
 
 struct BakeStats {
     double atlas_ms = 0.0, tables_ms = 0.0, bake_ms = 0.0;
-    double corrections_ms = 0.0;  // the vertex correction field's prepass (in bake_ms too)
-    int correction_paths = 0;     // its paths per texel (0: no field)
-    long correction_texels = 0;   // texels whose prepass ran
+    double corrections_ms = 0.0;     // the vertex correction field's prepass (in bake_ms too)
+    int correction_paths = 0;        // its paths per texel (0: no field)
+    long correction_texels = 0;      // texels whose prepass ran
+    long correction_straddling = 0;  // field texels crossed by geometry (lookups test them)
     long rays = 0, impulse_queries = 0, guarded = 0;
     long texels_valid = 0, texels_invalid = 0, texels_total = 0;
     int samples = 0;

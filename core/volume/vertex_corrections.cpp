@@ -30,8 +30,9 @@ constexpr double kFieldPathFraction = 0.5;
 // and the box's bottom row, which sees that texel at a large solid angle, read 2.3x VPT's
 // light (relMSE 0.018). Multiple scattering is the smoothest of the field's terms; the single-
 // scattering corrections, which change within a texel at a box's foot, stay unfiltered.
+template <typename SameSurface>
 void filter_multiple(const ObjectLightmap& map, const std::vector<char>& done,
-                     std::vector<IrradianceParts>& deferred) {
+                     const SameSurface& same_surface, std::vector<IrradianceParts>& deferred) {
     const int w = map.width, h = map.height;
     std::vector<vec3> filtered(deferred.size(), vec3(0.0f));
     for (int y0 = 0; y0 < h; ++y0)
@@ -45,8 +46,7 @@ void filter_multiple(const ObjectLightmap& map, const std::vector<char>& done,
                     const int x = x0 + dx, y = y0 + dy;
                     if (x < 0 || y < 0 || x >= w || y >= h) continue;
                     const size_t j = size_t(y) * size_t(w) + size_t(x);
-                    if (!done[j] || glm::dot(map.texels[j].normal, map.texels[i].normal) <= 0.9f)
-                        continue;
+                    if (!done[j] || !same_surface(i, j)) continue;
                     sum += deferred[j].multiple;
                     ++count;
                 }
@@ -54,6 +54,36 @@ void filter_multiple(const ObjectLightmap& map, const std::vector<char>& done,
         }
     for (size_t i = 0; i < deferred.size(); ++i)
         if (done[i]) deferred[i].multiple = filtered[i];
+}
+
+// Straddle rays run this fraction of a texel above the surface: a wall standing on it blocks
+// them at any height, the surface's own curvature within a texel (terrain) does not.
+constexpr float kStraddleLift = 0.1f;
+
+// How far above texel i its straddle and visibility rays run.
+float straddle_lift(const ObjectLightmap& map, size_t i) {
+    return kStraddleLift / map.density_at(i);
+}
+
+// Whether geometry crosses texel i's footprint (a wall standing on a roof's underside: the
+// eave outside, the attic inside, one texel at low density). Four rays along the surface from
+// the texel's centre, lifted, to its footprint's corners.
+bool straddles_geometry(const RayScene& rays, const ObjectLightmap& map, size_t i) {
+    const LightmapTexel& t = map.texels[i];
+    const Frame frame(t.normal);
+    const float reach = 0.7072f / map.density_at(i);
+    const vec3 from = spawn_point(t.position + t.normal * straddle_lift(map, i), t.normal);
+    for (const vec3& d :
+         {frame.t + frame.b, frame.t - frame.b, -frame.t + frame.b, -frame.t - frame.b})
+        if (rays.occluded(shadow_ray(from, glm::normalize(d), reach))) return true;
+    return false;
+}
+
+// Whether the segment between two points is clear.
+bool sees(const RayScene& rays, const vec3& from, const vec3& to) {
+    const vec3 d = to - from;
+    const float length = glm::length(d);
+    return !(length > 0.0f) || !rays.occluded(shadow_ray(from, d / length, length));
 }
 
 }  // namespace
@@ -88,6 +118,8 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
     packed_.resize(maps.size());
     triangles_.resize(maps.size());
     std::atomic<long> rays_cast{0}, computed{0};
+    long straddling = 0;
+    scene_ = &rays;
     for (size_t mi = 0; mi < maps.size(); ++mi) {
         const ObjectLightmap& map = maps[mi];
         int& of_object = map_of_object_[size_t(map.object)];
@@ -114,13 +146,27 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
         };
         const int w = map.width, stride = kFieldStride;
         auto valid = [&](size_t i) { return map.texels[i].state == TexelState::Valid; };
+        std::vector<char> straddles(n, 0);
+        tbb::parallel_for(size_t(0), n, [&](size_t i) {
+            if (valid(i)) straddles[i] = straddles_geometry(rays, map, i);
+        });
+        // Neighbours in the atlas stand for a texel when they face its way and, where geometry
+        // crosses either footprint, see it (not the eave's light for the attic behind the wall).
+        auto lifted = [&](size_t i) {
+            return map.texels[i].position + map.texels[i].normal * straddle_lift(map, i);
+        };
+        auto same_surface = [&](size_t i, size_t j) {
+            const LightmapTexel &a = map.texels[i], &b = map.texels[j];
+            return glm::dot(a.normal, b.normal) > 0.9f &&
+                   (!(straddles[i] || straddles[j]) || sees(rays, lifted(i), lifted(j)));
+        };
         // Every stride-th texel in x and y; the others take the mean of those around them on
         // their own surface, or run themselves where none is (a chart's thin strip).
         tbb::parallel_for(size_t(0), n, [&](size_t i) {
             if (valid(i) && int(i % size_t(w)) % stride == 0 && int(i / size_t(w)) % stride == 0)
                 run(i);
         });
-        filter_multiple(map, done, deferred);
+        filter_multiple(map, done, same_surface, deferred);
         std::vector<size_t> missing;
         std::vector<std::vector<size_t>> sources(n);
         for (size_t i = 0; i < n; ++i) {
@@ -131,8 +177,7 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
                 for (int x = std::max(0, x0 - stride + 1); x <= std::min(w - 1, x0 + stride - 1);
                      ++x) {
                     const size_t j = size_t(y) * size_t(w) + size_t(x);
-                    if (done[j] && glm::dot(map.texels[j].normal, map.texels[i].normal) > 0.9f)
-                        sources[i].push_back(j);
+                    if (done[j] && same_surface(i, j)) sources[i].push_back(j);
                 }
             if (sources[i].empty()) missing.push_back(i);
         }
@@ -146,8 +191,17 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
             deferred[i].single = mean.single * inv;
             deferred[i].multiple = mean.multiple * inv;
         }
-        std::vector<float> v(n * 6, 0.0f);
+        // Per texel: the emitters' RGB, the surface light's RGB, then (not stored) the lifted
+        // centre, the lift and whether geometry crosses the footprint, dilated alike.
+        constexpr size_t kChannels = 11;
+        std::vector<float> v(n * kChannels, 0.0f);
         for (size_t i = 0; i < n; ++i) {
+            if (valid(i)) {
+                const vec3 centre = lifted(i);
+                for (int c = 0; c < 3; ++c) v[i * kChannels + 6 + size_t(c)] = centre[c];
+                v[i * kChannels + 9] = straddle_lift(map, i);
+                v[i * kChannels + 10] = straddles[i] ? 1.0f : 0.0f;
+            }
             const vec3 emitters = (deferred[i].single + deferred[i].multiple) / float(paths_);
             const vec3 surface = deferred[i].surface / float(paths_);
             if (map.texels[i].state != TexelState::Valid ||
@@ -155,22 +209,36 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
                                surface.z))
                 continue;
             for (int c = 0; c < 3; ++c) {
-                v[i * 6 + size_t(c)] = emitters[c];
-                v[i * 6 + 3 + size_t(c)] = surface[c];
+                v[i * kChannels + size_t(c)] = emitters[c];
+                v[i * kChannels + 3 + size_t(c)] = surface[c];
             }
         }
         // Lookups near a chart's edge may land on the ring outside it.
-        dilate(map, v, 6, 2);
+        const std::vector<TexelState> states = dilate(map, v, int(kChannels), 2);
         PackedMap& packed = packed_[mi];
         packed.width = map.width;
         packed.height = map.height;
-        for (float x : v) packed.scale = std::max(packed.scale, std::abs(x));
+        for (size_t i = 0; i < n; ++i)
+            for (size_t c = 0; c < 6; ++c)
+                packed.scale = std::max(packed.scale, std::abs(v[i * kChannels + c]));
         const float inv = packed.scale > 0.0f ? 1.0f / packed.scale : 0.0f;
-        packed.halves.resize(v.size());
-        for (size_t k = 0; k < v.size(); ++k) packed.halves[k] = glm::packHalf1x16(v[k] * inv);
+        packed.halves.resize(n * 6);
+        packed.straddles.assign((n + 63) / 64, 0);
+        for (size_t i = 0; i < n; ++i) {
+            for (size_t c = 0; c < 6; ++c)
+                packed.halves[i * 6 + c] = glm::packHalf1x16(v[i * kChannels + c] * inv);
+            const bool filled = states[i] == TexelState::Valid || states[i] == TexelState::Dilated;
+            if (filled && v[i * kChannels + 10] > 0.0f) {
+                const float* e = &v[i * kChannels + 6];
+                packed.straddles[i / 64] |= uint64_t(1) << (i % 64);
+                packed.centres.push_back({uint32_t(i), vec3(e[0], e[1], e[2]), e[3]});
+                straddling += states[i] == TexelState::Valid;
+            }
+        }
     }
     rays_ = rays_cast;
     computed_ = computed;
+    straddling_ = straddling;
 }
 
 VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit) const {
@@ -188,7 +256,20 @@ VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit
     const PackedMap& map = packed_[size_t(mi)];
     const int x = std::clamp(int(uv.x), 0, map.width - 1);
     const int y = std::clamp(int(uv.y), 0, map.height - 1);
-    texel.halves_ = map.halves.data() + (size_t(y) * size_t(map.width) + size_t(x)) * 6;
+    const size_t k = size_t(y) * size_t(map.width) + size_t(x);
+    // Geometry crosses this texel: its value holds for the side its centre is on (one ray, on
+    // the few hits that land on such texels).
+    if (map.straddles[k / 64] >> (k % 64) & 1) {
+        const auto it =
+            std::lower_bound(map.centres.begin(), map.centres.end(), uint32_t(k),
+                             [](const StraddlingTexel& e, uint32_t key) { return e.texel < key; });
+        if (it != map.centres.end() && it->texel == k &&
+            !sees(*scene_,
+                  spawn_point(hit.position + hit.geometric_normal * it->lift, hit.geometric_normal),
+                  it->lifted_centre))
+            return texel;
+    }
+    texel.halves_ = map.halves.data() + k * 6;
     texel.scale_ = map.scale;
     texel.surface_light_ = surface_light_;
     __builtin_prefetch(texel.halves_);

@@ -21,7 +21,16 @@
 // texel's walk supplies it (texel_multiple = walk). One lookup a vertex, a cache miss (reading
 // a fixed texel instead made a smoke_room bake 7 % faster): stored as half floats and
 // prefetched where the vertex is found, read after its path; the prepass ~6 % of a surface
-// bake on sun_haze. Objects without a
+// bake on sun_haze. Where geometry crosses a texel's footprint (a wall standing on a roof's
+// underside: at 1 texel/unit one texel holds the eave outside and the attic inside) the
+// texel's value holds for its centre's side only: such texels are flagged (four rays from the
+// centre to its corners, 0.1 texel above the surface so that the surface's own curvature does
+// not count), a hit landing in one reads it only when a ray as high above reaches the centre,
+// and the prepass's neighbour means and filter only take neighbours that see each other across
+// them. On valley at 1 texel/unit (impulse vs VPT 128 spp, seed 0) the houses' median
+// lm_irradiance relMSE went 146 -> 1.6 (field off: 0.49), the terrain's 1.09 -> 0.63; 87 % of
+// the IFC houses' texels straddle (layered walls, frames), 0.6 % of the terrain's. Objects
+// without a
 // lightmap keep the tables. The field is fixed during the bake, so the bake stays
 // deterministic and --debug-texel re-runs it exactly.
 //
@@ -30,6 +39,7 @@
 // | vertex_corrections  | bake.vertex_corrections: 1 builds and reads the field (impulse)   |
 // | kFieldStride        | 2: the prepass runs every second texel in x and y                |
 // | kFieldPathFraction  | 0.5: ceil(spp x texel_mc_rate x 0.5) paths (1024 spp: 11)        |
+// | straddle rays       | 4 a texel, 0.71 / density long: geometry crossing the footprint   |
 // | surface light depth | 2: the surface a depth-1 vertex's walk reaches (deeper vertices   |
 // |                     | read light of up to depth - 1 more bounces than bake.bounces)    |
 #pragma once
@@ -82,6 +92,10 @@ class VertexCorrectionField {
     long rays() const { return rays_; }
     // Texels whose prepass ran (the others took their neighbours' mean).
     long computed_texels() const { return computed_; }
+    // Valid texels whose footprint geometry crosses: a lookup there (or in the ring dilated
+    // from them) casts a ray to the texel's centre and ignores the field when something is in
+    // between.
+    long straddling_texels() const { return straddling_; }
 
   private:
     const std::vector<ObjectLightmap>* maps_ = nullptr;
@@ -96,15 +110,27 @@ class VertexCorrectionField {
     // the surface light's, as half floats of value / scale (scale: the map's largest |value|,
     // so nothing overflows; relative precision 2^-11). A lookup is one random read, a cache
     // miss at 24 bytes a texel: 8 % of a smoke_room impulse bake, against ~2 % at 12.
+    // A texel crossed by geometry: its centre lifted off the surface by `lift` (the visibility
+    // ray from a hit runs as far above the hit's surface).
+    struct StraddlingTexel {
+        uint32_t texel;
+        vec3 lifted_centre;
+        float lift;
+    };
     struct PackedMap {
         int width = 0, height = 0;
         float scale = 0.0f;
         std::vector<uint16_t> halves;
+        // Texels crossed by geometry (a bit each) and their centres, by texel index.
+        std::vector<uint64_t> straddles;
+        std::vector<StraddlingTexel> centres;
     };
     std::vector<PackedMap> packed_;
     int paths_ = 0;
     long rays_ = 0;
     long computed_ = 0;
+    long straddling_ = 0;
+    const RayScene* scene_ = nullptr;
     bool surface_light_ = false;
 };
 
