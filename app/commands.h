@@ -28,6 +28,11 @@ struct RenderArgs {
     // before the first frame it keeps.
     std::string part;
     int warm_frames = 10;
+    // Stateful methods (render/frame_checkpoint.h): write the state before every K-th frame to
+    // OUT/checkpoints (0: none); start from the newest checkpoint in DIR at or before the first
+    // frame, rendering the frames in between without keeping them.
+    int checkpoint_every = 0;
+    std::string resume_from;
 };
 int run_render(const RenderArgs& args);  // render.cpp
 

@@ -126,6 +126,12 @@ int main(int argc, char** argv) {
     render->add_option("--warm-frames", r.warm_frames,
                        "method cache split into parts or ranks: frames each part renders to warm "
                        "its cache before the first frame it keeps (default 10)");
+    render->add_option("--checkpoint-every", r.checkpoint_every,
+                       "method cache: write the cache before every K-th frame to "
+                       "OUT/checkpoints/state_before_NNNN.bin");
+    render->add_option("--resume-from", r.resume_from,
+                       "DIR: continue from its newest checkpoint at or before the first of "
+                       "--frames (the frames kept are byte-identical to a run from frame 0)");
 
     std::string merge_out;
     std::vector<std::string> merge_parts;

@@ -23,6 +23,7 @@
 #include "image/colormap.h"
 #include "image/image_io.h"
 #include "image/layer_codec.h"
+#include "render/frame_checkpoint.h"
 #include "render/frame_renderer.h"
 #include "scene/provenance.h"
 #include "scene/scene_loader.h"
@@ -177,6 +178,28 @@ class FrameReceiver {
     std::thread thread_;
 };
 
+// --checkpoint-every and --resume-from: a stateful method, rendered by one process.
+void check_checkpoint_args(const RenderArgs& args, const RenderConfig& config,
+                           const WorkPart& part) {
+    if (args.checkpoint_every < 0)
+        throw Error("--checkpoint-every", std::to_string(args.checkpoint_every),
+                    "expected >= 0 (0: no checkpoints)");
+    auto stateful_and_whole = [&](const char* flag, const std::string& value) {
+        if (!config.needs_previous_frames())
+            throw Error(flag, value,
+                        "method " + args.method +
+                            " keeps nothing across frames (checkpoints are method cache's)");
+        if (!part.whole())
+            throw Error(flag, value, "one process renders the run: not with --part or mpirun");
+    };
+    if (args.checkpoint_every > 0)
+        stateful_and_whole("--checkpoint-every", std::to_string(args.checkpoint_every));
+    if (!args.resume_from.empty()) stateful_and_whole("--resume-from", args.resume_from);
+    if (!args.resume_from.empty() && !std::filesystem::is_directory(args.resume_from))
+        throw Error("--resume-from", args.resume_from,
+                    "expected the output directory of a run with --checkpoint-every");
+}
+
 }  // namespace
 
 int run_render(const RenderArgs& args) {
@@ -217,6 +240,7 @@ int run_render(const RenderArgs& args) {
                     "traces one process's renderer: run it without mpirun / --part");
     if (args.warm_frames < 0)
         throw Error("--warm-frames", std::to_string(args.warm_frames), "expected >= 0");
+    check_checkpoint_args(args, config, part);
 
     // Everything that can be wrong with the input is checked before any output exists.
     const Scene scene = load_scene(args.scene);
@@ -225,8 +249,20 @@ int run_render(const RenderArgs& args) {
     std::pair<int, int> debug{-1, -1};
     if (!args.debug_pixel.empty())
         debug = parse_pixel(args.debug_pixel, config.frame.width, config.frame.height);
-    const FramePlan plan =
+    FramePlan plan =
         plan_frames(first, last, part, config.needs_previous_frames(), args.warm_frames);
+    const json checkpoint_key = frame_checkpoint_key(
+        output_provenance(scene, args.method, settings.to_json(), long(config.frame.seed)));
+    // The state before the first frame: the newest checkpoint at or before it, or a cold
+    // start at frame 0 (what the sequential run had there).
+    FrameCheckpoint resumed;
+    if (!args.resume_from.empty()) {
+        const int at = latest_frame_checkpoint(args.resume_from, first);
+        if (at > 0)
+            resumed =
+                read_frame_checkpoint(frame_checkpoint_path(args.resume_from, at), checkpoint_key);
+        plan.start = std::max(0, at);
+    }
     cluster.set_work("frames " + describe_items(plan.keep));
 
     std::unique_ptr<tbb::global_control> limit;
@@ -236,6 +272,9 @@ int run_render(const RenderArgs& args) {
     EmbreeDevice device(args.threads);
     FrameRenderer renderer(scene, config, device);
     renderer.keep_cache_details(!args.debug_pixel.empty());  // the trace lists entry tuples
+    if (!resumed.state.empty())
+        renderer.restore_state(resumed.state,
+                               frame_checkpoint_path(args.resume_from, resumed.frame).string());
 
     const bool writer = cluster.rank() == 0;
     if (writer) {
@@ -258,12 +297,21 @@ int run_render(const RenderArgs& args) {
             receiver =
                 std::make_unique<FrameReceiver>(frames, (last - first) - int(plan.keep.size()));
         try {
+            auto checkpoint = [&](int rendered) {
+                if (args.checkpoint_every > 0 && (rendered + 1) % args.checkpoint_every == 0)
+                    write_frame_checkpoint(frame_checkpoint_path(args.out, rendered + 1),
+                                           checkpoint_key, rendered + 1, renderer.save_state());
+            };
             for (int f = plan.start; f < end; ++f) {
                 if (!std::binary_search(plan.keep.begin(), plan.keep.end(), f)) {
-                    if (config.needs_previous_frames()) renderer.render(f, progress);  // warm-up
+                    if (config.needs_previous_frames()) {
+                        renderer.render(f, progress);  // warm-up
+                        checkpoint(f);
+                    }
                     continue;
                 }
                 FrameResult r = renderer.render(f, progress);
+                checkpoint(f);
                 RenderedFrame out{f, r.time_s, r.stats, std::move(r.layers)};
                 if (writer)
                     frames.write(out);

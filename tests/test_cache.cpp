@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
+#include "base/error.h"
 #include "cache/reprojection.h"
 #include "render/frame_renderer.h"
 #include "scene/scene_loader.h"
@@ -535,5 +537,64 @@ TEST(CachePipeline, TraceWeightsAreTheRendersExactly) {
         }
         EXPECT_FLOAT_EQ(float(traced.sum),
                         f.layers.get("recon_weight").data[size_t(py) * 160 + px]);
+    }
+}
+
+// Checkpoints (render/frame_checkpoint.h) hold the cache exactly: a round trip gives the same
+// bytes and the same entries, and the cache grows and reuses slots as the original afterwards;
+// every truncation and a slot count past the bytes are refused as Error naming the cache.
+TEST(RadianceCacheStorage, EncodedCacheRoundTripsAndDamageIsRefused) {
+    RadianceCache cache;
+    cache.reset(3);
+    for (int k = 0; k < 40; ++k) {
+        CacheEntry e;
+        e.position = vec3(float(k), 1.0f, -2.0f);
+        e.shading = vec3(0.02f * k);
+        e.created = float(k % 5);
+        e.B_x = 3.0f + k;
+        e.key_light_mask = uint8_t(k % 8);
+        e.key_light_known = k % 2 == 0;
+        cache.object(k % 3).insert(e);
+    }
+    cache.object(1).remove({0, 2, 5});
+    ByteWriter w;
+    cache.encode(w);
+    const std::string bytes = w.bytes();
+    RadianceCache back;
+    ByteReader r(bytes, "test", "cache");
+    back.decode(r, "test");
+    EXPECT_EQ(r.remaining(), 0u);
+    ByteWriter again;
+    back.encode(again);
+    EXPECT_EQ(again.bytes(), bytes);
+    for (int o = 0; o < 3; ++o) {
+        ASSERT_EQ(back.object(o).capacity(), cache.object(o).capacity());
+        for (size_t s = 0; s < cache.object(o).capacity(); ++s) {
+            ASSERT_EQ(back.object(o).live(int(s)), cache.object(o).live(int(s)));
+            if (!cache.object(o).live(int(s))) continue;
+            EXPECT_EQ(back.object(o).get(int(s)).position, cache.object(o).get(int(s)).position);
+            EXPECT_EQ(back.object(o).key_light_mask(int(s)),
+                      cache.object(o).key_light_mask(int(s)));
+        }
+    }
+    // The next insertion lands in the same (freed) slot in both.
+    CacheEntry e;
+    EXPECT_EQ(back.object(1).insert(e), cache.object(1).insert(e));
+    for (size_t cut = 0; cut < bytes.size(); cut += 7) {
+        const std::string part = bytes.substr(0, cut);
+        ByteReader pr(part, "cut", "cache");
+        RadianceCache c;
+        EXPECT_THROW(c.decode(pr, "cut"), Error) << "cut at " << cut;
+    }
+    std::string huge = bytes;
+    const uint64_t many = uint64_t(1) << 40;
+    std::memcpy(huge.data(), &many, sizeof many);
+    ByteReader hr(huge, "huge", "cache");
+    RadianceCache c;
+    try {
+        c.decode(hr, "huge");
+        FAIL();
+    } catch (const Error& err) {
+        EXPECT_EQ(err.field(), "cache");
     }
 }

@@ -5,6 +5,8 @@
 
 #include <Imath/half.h>
 
+#include "base/error.h"
+
 namespace freqlab {
 
 namespace {
@@ -178,6 +180,86 @@ void ObjectCache::remove(const std::vector<int>& slots) {
         next_free_ = std::min(next_free_, size_t(s));
         --live_count_;
     }
+}
+
+void ObjectCache::encode(ByteWriter& w) const {
+    for (const auto* v : {&position_, &created_position_, &shading_, &reflected_position_})
+        w.put_vector(*v);
+    w.put_vector(view_);
+    w.put_vector(normal_);
+    w.put_vector(reflected_normal_);
+    for (const auto* v : {&created_, &occlusion_, &sigma_v_, &t_min_, &B_x_, &B_t_})
+        w.put_vector(*v);
+    for (const auto* v : {&B_theta_, &occlusion_field_, &shading_field_, &weight_})
+        w.put_vector(*v);
+    w.put_vector(reflected_object_);
+    w.put_vector(flags_);
+    w.put<uint64_t>(next_free_);
+    w.put<uint64_t>(live_count_);
+    w.put<int32_t>(reallocations_);
+}
+
+void ObjectCache::decode(ByteReader& r, const std::string& source) {
+    for (auto* v : {&position_, &created_position_, &shading_, &reflected_position_})
+        *v = r.get_vector<vec3>();
+    view_ = r.get_vector<vec2>();
+    normal_ = r.get_vector<uint32_t>();
+    reflected_normal_ = r.get_vector<uint32_t>();
+    for (auto* v : {&created_, &occlusion_, &sigma_v_, &t_min_, &B_x_, &B_t_})
+        *v = r.get_vector<float>();
+    for (auto* v : {&B_theta_, &occlusion_field_, &shading_field_, &weight_})
+        *v = r.get_vector<uint16_t>();
+    reflected_object_ = r.get_vector<int16_t>();
+    flags_ = r.get_vector<uint8_t>();
+    next_free_ = size_t(r.get<uint64_t>());
+    live_count_ = size_t(r.get<uint64_t>());
+    reallocations_ = r.get<int32_t>();
+    const size_t n = flags_.size();
+    const size_t sizes[] = {position_.size(),
+                            created_position_.size(),
+                            shading_.size(),
+                            reflected_position_.size(),
+                            view_.size(),
+                            normal_.size(),
+                            reflected_normal_.size(),
+                            created_.size(),
+                            occlusion_.size(),
+                            sigma_v_.size(),
+                            t_min_.size(),
+                            B_x_.size(),
+                            B_t_.size(),
+                            B_theta_.size(),
+                            occlusion_field_.size(),
+                            shading_field_.size(),
+                            weight_.size(),
+                            reflected_object_.size()};
+    for (size_t size : sizes)
+        if (size != n)
+            throw Error(source, "cache",
+                        "slot arrays of different lengths (" + std::to_string(size) + " and " +
+                            std::to_string(n) + ")");
+    size_t live = 0;
+    for (uint8_t f : flags_) live += f & kLive;
+    if (live != live_count_ || next_free_ > n)
+        throw Error(source, "cache",
+                    "inconsistent slots: " + std::to_string(live) + " live flags, " +
+                        std::to_string(live_count_) + " counted, cursor " +
+                        std::to_string(next_free_) + " of " + std::to_string(n));
+}
+
+void RadianceCache::encode(ByteWriter& w) const {
+    w.put<uint64_t>(objects_.size());
+    for (const ObjectCache& o : objects_) o.encode(w);
+}
+
+void RadianceCache::decode(ByteReader& r, const std::string& source) {
+    const uint64_t n = r.get<uint64_t>();
+    // Each object holds at least its 19 array lengths: a count past the bytes left is damage.
+    if (n > r.remaining() / (19 * sizeof(uint64_t)))
+        throw Error(source, "cache",
+                    std::to_string(n) + " objects in " + std::to_string(r.remaining()) + " bytes");
+    objects_.assign(size_t(n), ObjectCache{});
+    for (ObjectCache& o : objects_) o.decode(r, source);
 }
 
 void RadianceCache::reset(size_t objects) {

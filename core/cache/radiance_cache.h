@@ -22,8 +22,10 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
+#include "base/byte_stream.h"
 #include "math/types.h"
 
 namespace freqlab {
@@ -77,6 +79,12 @@ class ObjectCache {
     static size_t bytes_per_slot();
     int reallocations() const { return reallocations_; }
 
+    // Every slot's fields, the free-slot cursor and the growth count, exactly (a checkpoint:
+    // the cache resumed from it grows and reuses slots as the one that wrote it).
+    void encode(ByteWriter& w) const;
+    // Throws Error naming `source` when the bytes are not a whole, consistent ObjectCache.
+    void decode(ByteReader& r, const std::string& source);
+
     // Hot fields read by the per-frame reprojection.
     const std::vector<vec3>& positions() const { return position_; }
     const std::vector<float>& created_times() const { return created_; }
@@ -112,6 +120,8 @@ class RadianceCache {
     // Removes the oldest live entries until bytes() would fit `max_bytes` at the current
     // capacity (slots are freed, not released). Returns how many were evicted.
     long evict_oldest(size_t max_bytes);
+    void encode(ByteWriter& w) const;
+    void decode(ByteReader& r, const std::string& source);
 
   private:
     std::vector<ObjectCache> objects_;

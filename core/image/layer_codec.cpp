@@ -10,26 +10,6 @@ namespace {
 constexpr uint32_t kMagic = 0x464c4c53;  // "FLLS"
 }
 
-void ByteReader::get_bytes(void* out, size_t n) {
-    if (n > remaining())
-        throw Error(source_, "layers",
-                    "truncated message: " + std::to_string(n) + " bytes wanted at offset " +
-                        std::to_string(at_) + ", " + std::to_string(remaining()) + " left");
-    std::memcpy(out, bytes_.data() + at_, n);
-    at_ += n;
-}
-
-std::string ByteReader::get_string() {
-    const uint64_t n = get<uint64_t>();
-    if (n > remaining())
-        throw Error(source_, "layers",
-                    "a string of " + std::to_string(n) + " bytes with " +
-                        std::to_string(remaining()) + " left");
-    std::string s(bytes_.data() + at_, size_t(n));
-    at_ += size_t(n);
-    return s;
-}
-
 std::string encode_layers(const LayerSet& layers) {
     ByteWriter w;
     w.put(kMagic);

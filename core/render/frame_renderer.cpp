@@ -74,6 +74,24 @@ const EnvBandwidthHierarchy* FrameRenderer::bandwidth() {
     return bandwidth_.get();
 }
 
+std::string FrameRenderer::save_state() const {
+    if (!method_state_) return {};
+    ByteWriter w;
+    method_state_->encode(w);
+    return std::move(w.bytes());
+}
+
+void FrameRenderer::restore_state(const std::string& bytes, const std::string& source) {
+    if (!method_state_)
+        throw Error(source, "method",
+                    "method " + render_method_info(config_.method).name +
+                        " keeps nothing across frames: there is no state to restore");
+    ByteReader r(bytes, source, "state");
+    method_state_->decode(r, source);
+    if (r.remaining() != 0)
+        throw Error(source, "state", std::to_string(r.remaining()) + " bytes left over");
+}
+
 FrameResult FrameRenderer::render(int frame, Progress& progress) {
     const auto t_start = Clock::now();
     FrameResult result;

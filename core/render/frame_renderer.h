@@ -68,6 +68,12 @@ class FrameRenderer {
     FrameRenderer(const Scene& scene, const RenderConfig& config, const EmbreeDevice& device);
     FrameResult render(int frame, Progress& progress);
     const RayScene& ray_scene() const { return ray_scene_; }
+    // What the method keeps across frames (method A's cache, and the frame it last rendered) as
+    // bytes, and back: rendering on from a restored state gives the bytes the renderer that
+    // saved it would have (render/frame_checkpoint.h). Stateless methods: empty / refused.
+    bool has_state() const { return method_state_ != nullptr; }
+    std::string save_state() const;
+    void restore_state(const std::string& bytes, const std::string& source);
     // Method cache: also return a copy of the cache as it was before each frame (for the
     // inspector; costs a copy of the cache per frame).
     void keep_cache_details(bool on) { keep_cache_details_ = on; }

@@ -81,6 +81,14 @@ MethodOutput render_sparse_method(MethodContext& c) {
 
 struct CacheMethodState : MethodState {
     CacheState cache;
+    void encode(ByteWriter& w) const override {
+        w.put<int32_t>(cache.last_frame);
+        cache.cache.encode(w);
+    }
+    void decode(ByteReader& r, const std::string& source) override {
+        cache.last_frame = r.get<int32_t>();
+        cache.cache.decode(r, source);
+    }
 };
 
 MethodOutput render_cache_method(MethodContext& c) {

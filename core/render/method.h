@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "base/byte_stream.h"
 #include "base/job.h"
 #include "image/layers.h"
 #include "render/gbuffer.h"
@@ -37,6 +38,10 @@ enum class SampleSequence;
 // What a method keeps across the frames of one FrameRenderer (method A's cache).
 struct MethodState {
     virtual ~MethodState() = default;
+    // The state exactly, for a checkpoint (render/frame_checkpoint.h); decode throws Error
+    // naming `source` on bytes that are not a whole state.
+    virtual void encode(ByteWriter& w) const = 0;
+    virtual void decode(ByteReader& r, const std::string& source) = 0;
 };
 
 // One frame's inputs: the scene at the frame's time, its G-buffer, and the result whose
