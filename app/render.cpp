@@ -241,6 +241,10 @@ int run_render(const RenderArgs& args) {
     if (args.warm_frames < 0)
         throw Error("--warm-frames", std::to_string(args.warm_frames), "expected >= 0");
     check_checkpoint_args(args, config, part);
+    // What is reported is what runs: on the command line, checkpoints only when asked for.
+    if (config.needs_previous_frames())
+        settings.apply_assignment("cache.checkpoint_every=" + std::to_string(args.checkpoint_every),
+                                  "--checkpoint-every");
 
     // Everything that can be wrong with the input is checked before any output exists.
     const Scene scene = load_scene(args.scene);
@@ -298,7 +302,9 @@ int run_render(const RenderArgs& args) {
                 std::make_unique<FrameReceiver>(frames, (last - first) - int(plan.keep.size()));
         try {
             auto checkpoint = [&](int rendered) {
-                if (args.checkpoint_every > 0 && (rendered + 1) % args.checkpoint_every == 0)
+                const int every =
+                    config.needs_previous_frames() ? config.cache.checkpoint_every : 0;
+                if (every > 0 && (rendered + 1) % every == 0)
                     write_frame_checkpoint(frame_checkpoint_path(args.out, rendered + 1),
                                            checkpoint_key, rendered + 1, renderer.save_state());
             };

@@ -22,7 +22,9 @@
 #include "image/image_io.h"
 #include "layer_view.h"
 #include "osmesa_host.h"
+#include "render/frame_checkpoint.h"
 #include "render/frame_renderer.h"
+#include "scene/provenance.h"
 #include "scene/scene_loader.h"
 #include "settings_panel.h"
 #include "volume/bake_estimators.h"
@@ -51,6 +53,13 @@ void restart_renderer(Workbench::State& s) {
         s.renderer = std::make_unique<FrameRenderer>(s.scene, s.config, *s.device);
         s.renderer->keep_cache_details(true);  // the inspector lists cache entries' tuples
     }
+    s.state_next = 0;
+    if (s.config.needs_previous_frames()) {
+        s.run_key = frame_checkpoint_key(
+            output_provenance(s.scene, render_method_info(s.config.method).name,
+                              s.config.settings_group().to_json(), long(s.config.frame.seed)));
+        s.run_dir = run_store_directory(s.run_key);
+    }
     // References depend on the settings too: drop them with the frames.
     s.reference_job.reset();
     s.reference_renderer.reset();
@@ -77,20 +86,48 @@ void start_job_if_needed(Workbench::State& s) {
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
         if (s.results.count(s.frame)) return;
-        // Scrubbing forward with a method that carries state across frames renders every
-        // frame in between, in order; scrubbing back shows what is kept.
-        if (s.config.needs_previous_frames())
-            for (int f = 0; f < s.frame; ++f)
-                if (!s.results.count(f)) {
-                    frame = f;
-                    break;
-                }
+    }
+    // A method with state across frames renders every frame from where it starts up to the one
+    // asked for, in order (each kept: scrubbing back is instant). It starts where its state
+    // is, from the run's newest checkpoint at or before the frame, or cold at frame 0,
+    // whichever renders fewer frames; every start gives the frames of the run from frame 0.
+    const bool stateful = s.config.needs_previous_frames();
+    int restore = -1;
+    if (stateful) {
+        const int next = s.state_next;
+        frame = 0;
+        int cost = s.frame + 1;
+        if (next >= 0 && next <= s.frame && s.frame - next + 1 <= cost) {
+            frame = next;
+            cost = s.frame - next + 1;
+        }
+        const int c =
+            s.config.cache.checkpoint_every > 0 ? latest_frame_checkpoint(s.run_dir, s.frame) : -1;
+        if (c > 0 && s.frame - c + 1 < cost) frame = restore = c;
     }
     s.job_frame = frame;
+    // The checkpoint the frames rendered since the last jump started from (-1: frame 0).
+    if (restore > 0)
+        s.job_resumed_from = restore;
+    else if (frame == 0)
+        s.job_resumed_from = -1;
     Workbench::State* sp = &s;
-    s.job = std::make_unique<Job>([sp, frame](Progress& progress) {
+    const fs::path restore_file = restore > 0 ? frame_checkpoint_path(s.run_dir, restore) : "";
+    const int every = stateful ? s.config.cache.checkpoint_every : 0;
+    s.job = std::make_unique<Job>([sp, frame, restore_file, every](Progress& progress) {
         progress.set_stage_count(sp->config.method == RenderMethod::GBuffer ? 1 : 2);
+        if (!restore_file.empty())
+            sp->renderer->restore_state(read_frame_checkpoint(restore_file, sp->run_key).state,
+                                        restore_file.string());
         FrameResult r = sp->renderer->render(frame, progress);
+        if (sp->renderer->has_state()) {
+            sp->state_next = frame + 1;
+            const fs::path file = frame_checkpoint_path(sp->run_dir, frame + 1);
+            if (every > 0 && (frame + 1) % every == 0 && !fs::exists(file)) {
+                write_frame_checkpoint(file, sp->run_key, frame + 1, sp->renderer->save_state());
+                trim_run_store(sp->run_dir);
+            }
+        }
         std::lock_guard<std::mutex> lock(sp->results_mutex);
         sp->results[frame] = std::move(r);
     });
@@ -237,8 +274,16 @@ void draw_timeline(Workbench::State& s) {
                          peak > 0 ? peak : 1.0f, ImVec2(ImGui::GetContentRegionAvail().x, 44));
     if (s.job && !s.job->done()) {
         const ProgressSnapshot p = s.job->snapshot();
-        ImGui::Text("rendering frame %d: %s %.0f%%  ETA %s", s.job_frame, p.stage.c_str(),
-                    100 * p.fraction,
+        // Which frame the job really renders: on the way to the one asked for, a stateful
+        // method renders those before it (from a checkpoint when the run store has one).
+        std::string way;
+        if (s.job_frame != s.frame && s.config.needs_previous_frames())
+            way = " on the way to " + std::to_string(s.frame) +
+                  (s.job_resumed_from > 0
+                       ? " (from the checkpoint before " + std::to_string(s.job_resumed_from) + ")"
+                       : "");
+        ImGui::Text("rendering frame %d%s: %s %.0f%%  ETA %s", s.job_frame, way.c_str(),
+                    p.stage.c_str(), 100 * p.fraction,
                     p.eta_s >= 0 ? (std::to_string(int(p.eta_s + 0.5)) + " s").c_str() : "--");
         ImGui::SameLine();
         if (ImGui::SmallButton("cancel")) s.job->cancel();
@@ -490,6 +535,15 @@ const std::vector<std::string>& Workbench::trace_lines() const {
 }
 int Workbench::frame() const {
     return s_->frame;
+}
+std::vector<int> Workbench::recorded_frames() const {
+    std::lock_guard<std::mutex> lock(s_->results_mutex);
+    std::vector<int> frames;
+    for (const auto& [f, r] : s_->results) frames.push_back(f);
+    return frames;
+}
+int Workbench::resumed_from() const {
+    return s_->job_resumed_from;
 }
 
 bool Workbench::set_layer(const std::string& name) {

@@ -4,6 +4,8 @@
 
 #include <imgui.h>
 
+#include <atomic>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -40,6 +42,13 @@ struct Workbench::State {
     std::unique_ptr<FrameRenderer> renderer;
     std::unique_ptr<Job> job;
     int job_frame = -1;
+    // Method cache (render/frame_checkpoint.h): the frame the renderer's state comes before
+    // (set by the job), the run's key and its folder in the run store, where the job saves the
+    // cache before every cache.checkpoint_every-th frame and a jump resumes from.
+    std::atomic<int> state_next{0};
+    nlohmann::json run_key;
+    std::filesystem::path run_dir;
+    int job_resumed_from = -1;  // the checkpoint the running job restored (-1: none)
 
     mutable std::mutex results_mutex;
     std::map<int, FrameResult> results;  // rendered frames: scrubbing back is instant

@@ -1,8 +1,11 @@
 #include "render/frame_checkpoint.h"
 
+#include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <regex>
+#include <vector>
 
 #include "base/byte_stream.h"
 #include "base/error.h"
@@ -29,6 +32,9 @@ json frame_checkpoint_key(const json& provenance) {
     json key = json::object();
     for (const char* field : kKeyFields)
         if (provenance.contains(field)) key[field] = provenance[field];
+    // How often checkpoints are written does not change the state they hold.
+    if (key.contains("settings") && key["settings"].contains("cache"))
+        key["settings"]["cache"].erase("checkpoint_every");
     return key;
 }
 
@@ -78,6 +84,50 @@ FrameCheckpoint read_frame_checkpoint(const fs::path& file, const json& key) {
     c.frame = r.get<int32_t>();
     c.state = r.get_string();
     return c;
+}
+
+fs::path run_store_directory(const json& key) {
+    char hex[24];
+    std::snprintf(hex, sizeof hex, "%016llx", (unsigned long long)fnv1a(key.dump()));
+    return cache_directory() / "runs" / hex;
+}
+
+int trim_run_store(const fs::path& keep) {
+    double cap_mb = 4096.0;
+    if (const char* env = std::getenv("FREQLAB_RUN_STORE_MB"); env && *env) cap_mb = std::atof(env);
+    const uint64_t cap = uint64_t(std::max(0.0, cap_mb) * 1024.0 * 1024.0);
+    struct Run {
+        fs::path dir;
+        fs::file_time_type written;
+        uint64_t bytes = 0;
+    };
+    std::vector<Run> runs;
+    uint64_t total = 0;
+    std::error_code ec;
+    for (fs::directory_iterator it(keep.parent_path(), ec), end; !ec && it != end;
+         it.increment(ec)) {
+        if (!it->is_directory()) continue;
+        Run run{it->path(), fs::file_time_type::min(), 0};
+        for (fs::recursive_directory_iterator f(run.dir, ec), fend; !ec && f != fend;
+             f.increment(ec)) {
+            if (!f->is_regular_file()) continue;
+            run.bytes += f->file_size();
+            run.written = std::max(run.written, f->last_write_time());
+        }
+        total += run.bytes;
+        runs.push_back(run);
+    }
+    std::sort(runs.begin(), runs.end(),
+              [](const Run& a, const Run& b) { return a.written < b.written; });
+    int removed = 0;
+    for (const Run& run : runs) {
+        if (total <= cap) break;
+        if (fs::equivalent(run.dir, keep, ec)) continue;
+        fs::remove_all(run.dir, ec);
+        total -= run.bytes;
+        ++removed;
+    }
+    return removed;
 }
 
 int latest_frame_checkpoint(const fs::path& dir, int frame) {

@@ -43,6 +43,13 @@ struct FrameCheckpoint {
 // a key that differs from `key` (the field that differs is named).
 FrameCheckpoint read_frame_checkpoint(const std::filesystem::path& file, const nlohmann::json& key);
 
+// Where the workbench keeps a run's checkpoints: $FREQLAB_CACHE_DIR/runs/<hash of the key>.
+std::filesystem::path run_store_directory(const nlohmann::json& key);
+
+// Keeps the run store under its cap ($FREQLAB_RUN_STORE_MB, default 4096): removes the least
+// recently written runs other than `keep` until the rest fit. Returns the runs removed.
+int trim_run_store(const std::filesystem::path& keep);
+
 // The newest checkpoint in DIR at or before `frame` (-1 when there is none).
 int latest_frame_checkpoint(const std::filesystem::path& dir, int frame);
 

@@ -48,6 +48,12 @@ const SettingsSchema& CacheSettings::schema() {
                    "Memory cap of all caches' live points together; beyond it the oldest are "
                    "evicted after each frame (the slot storage, cache_bytes in the stats, may "
                    "hold one frame's new points more: they are inserted before the eviction).")
+            .field(&CacheSettings::checkpoint_every, "checkpoint_every", 0, 10000, "frames",
+                   kInvalidatesNothing,
+                   "The workbench saves the cache before every K-th frame in the run store "
+                   "($FREQLAB_CACHE_DIR/runs); a jump to a frame not rendered yet resumes from "
+                   "the newest one at or before it, the frames byte-identical to rendering "
+                   "from frame 0 (0: none; `render --checkpoint-every K` on the command line).")
             .build();
     return s;
 }

@@ -20,6 +20,7 @@ struct CacheSettings {
     bool merge = true;
     float depth_tolerance = 0.01f;  // z-buffer test: relative depth difference allowed
     float max_megabytes = 256.0f;   // memory cap: the oldest entries are evicted beyond it
+    int checkpoint_every = 10;      // the workbench's checkpoints (render/frame_checkpoint.h)
     static const SettingsSchema& schema();
 };
 

@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 #include "base/error.h"
 
@@ -703,4 +704,48 @@ TEST(GlWorkbench, EnvironmentViewIsNoFrame) {
     wb.request_reference();
     EXPECT_FALSE(wb.reference_busy()) << "a reference render of the environment view started";
     EXPECT_NE(wb.status().find("no reference"), std::string::npos) << wb.status();
+}
+
+// Cache checkpoints in the workbench (issue "The timeline as a recorded run", acceptance 2): a
+// first session renders rotor's frames 0..6 in order and leaves checkpoints before frames 3 and
+// 6 in the run store; a second session (same scene and settings) jumping to frame 6 renders only
+// frame 6, from the checkpoint, and shows the first session's bytes; a jump to 5 renders 3, 4, 5.
+TEST(GlWorkbench, JumpsResumeFromTheRunsCheckpointsWithTheSameBytes) {
+    const fs::path store = fs::temp_directory_path() / "freqlab_gl_run_store";
+    fs::remove_all(store);
+    setenv("FREQLAB_CACHE_DIR", store.c_str(), 1);
+    GlSession gl;
+    WorkbenchOptions o = small_scene("color");
+    o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/rotor.json";
+    o.method = "cache";
+    o.settings.push_back("cache.checkpoint_every=3");
+    std::map<int, std::vector<float>> first;
+    {
+        Workbench wb(o);
+        for (int f = 0; f <= 6; ++f) {
+            wb.set_frame(f);
+            run_until_shown(gl, wb);
+            first[f] = wb.layers()->get("color").data;
+        }
+    }
+    size_t checkpoints = 0;
+    for (const auto& e : fs::recursive_directory_iterator(store))
+        checkpoints += e.path().filename().string().rfind("state_before_", 0) == 0;
+    EXPECT_EQ(checkpoints, 2u) << "before frames 3 and 6";
+    {
+        Workbench wb(o);
+        run_until_shown(gl, wb);  // frame 0
+        wb.set_frame(6);
+        run_until_shown(gl, wb);
+        EXPECT_EQ(wb.resumed_from(), 6);
+        EXPECT_EQ(wb.recorded_frames(), (std::vector<int>{0, 6}));
+        EXPECT_EQ(wb.layers()->get("color").data, first[6]);
+        wb.set_frame(5);
+        run_until_shown(gl, wb);
+        EXPECT_EQ(wb.resumed_from(), 3);
+        EXPECT_EQ(wb.recorded_frames(), (std::vector<int>{0, 3, 4, 5, 6}));
+        EXPECT_EQ(wb.layers()->get("color").data, first[5]);
+    }
+    unsetenv("FREQLAB_CACHE_DIR");
+    fs::remove_all(store);
 }
