@@ -80,3 +80,8 @@ fig_dir=$(mktemp -d)
 "$bin" figure "$fig_dir/frame_0002.exr" --layer cache_decisions \
      --title "rotor, frame 2, cache_decisions" --out screenshots/figure_cache_decisions.png
 rm -rf "$fig_dir"
+# window_checkpoint_jump.png is a journey in a real window (session 23, Xvfb + xdotool, by hand):
+# `freqlab gui scenes/rotor.json --method cache --set frame.width=320 --set frame.height=180
+# --set cache.checkpoint_every=5`, Right arrow 11 times (checkpoints before 5 and 10 in the run
+# store), quit, start it again and click frame 13 on the timeline: the shot is taken while it
+# renders frame 12 on the way, from the checkpoint before 10.

@@ -13,7 +13,10 @@ class GlHost {
     virtual ~GlHost() = default;
     virtual bool should_close() const = 0;
     virtual void begin_frame() = 0;  // events / ImGui platform frame
-    virtual void end_frame() = 0;    // present
+    // Nothing on screen will change until an input event: a window host may sleep in
+    // begin_frame() until one comes (or a short timeout), instead of redrawing at full rate.
+    virtual void set_idle(bool) {}
+    virtual void end_frame() = 0;  // present
     virtual void framebuffer_size(int* w, int* h) const = 0;
     // The monitor's content scale (DPI / 96): what --ui-scale 0 (auto) scales the UI by.
     virtual float content_scale() const { return 1.0f; }

@@ -47,7 +47,12 @@ bool GlfwHost::should_close() const {
 }
 
 void GlfwHost::begin_frame() {
-    glfwPollEvents();
+    // Idle: sleep until an input event, waking twice a second for what changes without one
+    // (a background table build); busy (a job's progress, playback): one frame per vsync.
+    if (idle_)
+        glfwWaitEventsTimeout(0.5);
+    else
+        glfwPollEvents();
     ImGui_ImplGlfw_NewFrame();
 }
 

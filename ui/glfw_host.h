@@ -17,9 +17,11 @@ class GlfwHost : public GlHost {
     void end_frame() override;
     void framebuffer_size(int* w, int* h) const override;
     float content_scale() const override;
+    void set_idle(bool idle) override { idle_ = idle; }
 
   private:
     GLFWwindow* window_ = nullptr;
+    bool idle_ = false;
 };
 
 }  // namespace freqlab::ui

@@ -536,6 +536,14 @@ const std::vector<std::string>& Workbench::trace_lines() const {
 int Workbench::frame() const {
     return s_->frame;
 }
+bool Workbench::busy() const {
+    auto running = [](const std::unique_ptr<Job>& j) { return j && !j->done(); };
+    const State& s = *s_;
+    return s.playing || running(s.job) || running(s.reference_job) ||
+           running(s.env_bandwidth_job) || bake_busy(s) || s.view_dirty ||
+           (s.error.empty() && !frame_shown());
+}
+
 std::vector<int> Workbench::recorded_frames() const {
     std::lock_guard<std::mutex> lock(s_->results_mutex);
     std::vector<int> frames;
@@ -686,6 +694,7 @@ int run_loop(GlHost& host, Workbench& wb, const WorkbenchOptions& options, bool 
     for (;;) {
         if (interactive && host.should_close()) return 0;
         if (!interactive && !wb.frame_shown()) wb.wait_for_render();
+        host.set_idle(!wb.busy());
         render_ui_frame(host, wb);
         if (!options.screenshot.empty()) {
             if (settle < 0 && wb.frame_shown()) settle = 2;

@@ -74,7 +74,9 @@ class Workbench {
     bool set_layer(const std::string& name);
     void apply_setting(const std::string& assignment);  // "prefix.key=value"; re-renders as needed
     bool frame_shown() const;                           // the current frame's result is on screen
-    std::vector<int> recorded_frames() const;           // frames rendered and kept, in order
+    // Something on screen changes without input: a job runs, playback, a frame not shown yet.
+    bool busy() const;
+    std::vector<int> recorded_frames() const;  // frames rendered and kept, in order
     // The checkpoint the last render job of a stateful method started from (-1: none).
     int resumed_from() const;
     void wait_for_render();  // blocks until no render job is running (tests, headless)
