@@ -54,6 +54,7 @@ void restart_renderer(Workbench::State& s) {
         s.renderer->keep_cache_details(true);  // the inspector lists cache entries' tuples
     }
     s.state_next = 0;
+    s.cancelled_frame = -1;
     if (s.config.needs_previous_frames()) {
         s.run_key = frame_checkpoint_key(
             output_provenance(s.scene, render_method_info(s.config.method).name,
@@ -79,8 +80,11 @@ void start_job_if_needed(Workbench::State& s) {
     if (s.job) {
         const ProgressSnapshot snap = s.job->snapshot();
         if (!snap.error.empty()) s.error = snap.error;
+        if (snap.cancelled) s.cancelled_frame = s.frame;
         s.job.reset();
     }
+    if (s.cancelled_frame == s.frame) return;
+    s.cancelled_frame = -1;
     if (!s.renderer || !s.error.empty()) return;  // do not retry a failing render every frame
     int frame = s.frame;
     {
@@ -287,6 +291,10 @@ void draw_timeline(Workbench::State& s) {
                     p.eta_s >= 0 ? (std::to_string(int(p.eta_s + 0.5)) + " s").c_str() : "--");
         ImGui::SameLine();
         if (ImGui::SmallButton("cancel")) s.job->cancel();
+    } else if (s.cancelled_frame == s.frame && !s.bake) {
+        ImGui::Text("frame %d: cancelled (not rendered)", s.frame);
+        ImGui::SameLine();
+        if (ImGui::SmallButton("render")) s.cancelled_frame = -1;
     } else if (s.shown && s.shown->environment_view) {
         ImGui::Text("environment bandwidth: %d levels   %s", s.shown->stats["levels"].get<int>(),
                     s.status.c_str());
@@ -540,8 +548,12 @@ bool Workbench::busy() const {
     auto running = [](const std::unique_ptr<Job>& j) { return j && !j->done(); };
     const State& s = *s_;
     return s.playing || running(s.job) || running(s.reference_job) ||
-           running(s.env_bandwidth_job) || bake_busy(s) || s.view_dirty ||
-           (s.error.empty() && !frame_shown());
+           running(s.env_bandwidth_job) || bake_busy(s) || (s.view_dirty && s.shown) ||
+           (s.error.empty() && s.cancelled_frame != s.frame && !frame_shown());
+}
+
+void Workbench::cancel_render() {
+    if (s_->job) s_->job->cancel();
 }
 
 std::vector<int> Workbench::recorded_frames() const {

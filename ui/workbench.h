@@ -77,6 +77,7 @@ class Workbench {
     // Something on screen changes without input: a job runs, playback, a frame not shown yet.
     bool busy() const;
     std::vector<int> recorded_frames() const;  // frames rendered and kept, in order
+    void cancel_render();  // as the status line's cancel: stops the job, starts none again
     // The checkpoint the last render job of a stateful method started from (-1: none).
     int resumed_from() const;
     void wait_for_render();  // blocks until no render job is running (tests, headless)

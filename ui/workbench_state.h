@@ -49,6 +49,9 @@ struct Workbench::State {
     nlohmann::json run_key;
     std::filesystem::path run_dir;
     int job_resumed_from = -1;  // the checkpoint the running job restored (-1: none)
+    // A render cancelled by the user stays cancelled: no job starts for this frame again until
+    // the frame or a setting changes, or the status line's "render" is pressed.
+    int cancelled_frame = -1;
 
     mutable std::mutex results_mutex;
     std::map<int, FrameResult> results;  // rendered frames: scrubbing back is instant

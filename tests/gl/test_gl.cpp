@@ -749,3 +749,26 @@ TEST(GlWorkbench, JumpsResumeFromTheRunsCheckpointsWithTheSameBytes) {
     unsetenv("FREQLAB_CACHE_DIR");
     fs::remove_all(store);
 }
+
+// Cancel cancels (issue "The timeline as a recorded run", acceptance 5): the job stops, and no
+// job for that frame starts again by itself (it restarted on the next UI frame); the window may
+// sleep. Another frame, or "render", renders again.
+TEST(GlWorkbench, CancelledRenderStaysCancelledUntilAsked) {
+    GlSession gl;
+    WorkbenchOptions o = small_scene("color");
+    o.method = "mis";
+    o.settings.push_back("mis.spp=4096");
+    Workbench wb(o);
+    render_ui_frame(*gl.host, wb);  // starts frame 0's job
+    ASSERT_TRUE(wb.busy());
+    wb.cancel_render();
+    wb.wait_for_render();
+    for (int i = 0; i < 5; ++i) render_ui_frame(*gl.host, wb);
+    EXPECT_FALSE(wb.frame_shown());
+    EXPECT_FALSE(wb.busy()) << "a job started again after the cancel";
+    EXPECT_TRUE(wb.recorded_frames().empty());
+    EXPECT_TRUE(wb.error().empty()) << wb.error();
+    wb.apply_setting("mis.spp=2");
+    run_until_shown(gl, wb);
+    EXPECT_EQ(wb.recorded_frames(), std::vector<int>{0});
+}
