@@ -289,6 +289,16 @@ int main(int argc, char** argv) {
             const auto [w, h] = freqlab::parse_size(gui_size, "--size");
             options.width = w, options.height = h;
         }
+        if (argc == 1) {
+            // First start: what the tool is for, not an unlit preview. Method A's cache on the
+            // built-in scene's animation, playing.
+            options.method = "cache";
+            options.play = true;
+            options.hint =
+                "Method A: a frequency-chosen subset of pixels shaded, radiance points reused "
+                "across frames from an object-space cache. D: each entry's reuse / discard reason; "
+                "click a pixel: why; Space: pause; the Help menu: the rest.";
+        }
         if (headless) return freqlab::ui::run_headless(options);
         const char* display = std::getenv("DISPLAY");
         if (!display || !*display) return headless_fallback(gui_scene, gui_frame);

@@ -85,3 +85,6 @@ rm -rf "$fig_dir"
 # --set cache.checkpoint_every=5`, Right arrow 11 times (checkpoints before 5 and 10 in the run
 # store), quit, start it again and click frame 13 on the timeline: the shot is taken while it
 # renders frame 12 on the way, from the checkpoint before 10.
+# window_first_start.png / window_first_start_decisions.png: `freqlab` with no argument in a
+# real window under Xvfb (session 23, by hand): method A's cache on the built-in scene, playing,
+# with the hint line; then the D key (cache decisions over the colour).

@@ -75,6 +75,22 @@ namespace {
 
 const char* kStats[] = {"time_ms", "rays", "pixels_shaded"};
 
+// D: method A's cache decisions (the previous frame's entries where they land, coloured by
+// reuse or discard reason) over the colour, and back.
+void toggle_decision_overlay(Workbench::State& s) {
+    const char* kLayer = "cache_decisions";
+    if (s.layer_name == kLayer) {
+        s.layer_name = "color";
+    } else if (!s.shown || s.shown->layers.find(kLayer)) {
+        s.layer_name = kLayer;
+        s.overlay_on_color = true;
+    } else {
+        s.status = "D: this method has no cache decisions (method cache has)";
+        return;
+    }
+    s.view_dirty = true;
+}
+
 void start_job_if_needed(Workbench::State& s) {
     if (s.job && !s.job->done()) return;
     if (s.job) {
@@ -360,6 +376,7 @@ void Workbench::reset(const WorkbenchOptions& options, Scene* loaded) {
             for (const std::string& a : options.settings) group.apply_assignment(a);
         }
         s.frame = std::clamp(options.frame, 0, s.scene.frame_count - 1);
+        s.playing = options.play;
         restart_renderer(s);
     } catch (const Error& e) {
         s.error = e.what();
@@ -449,6 +466,7 @@ void Workbench::draw(int fb_w, int fb_h) {
         if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_RightArrow)))
             s.frame = std::min(s.scene.frame_count - 1, s.frame + 1);
         if (ImGui::IsKeyPressed('F')) s.zoom = 1.0f, s.centre = ImVec2(0.5f, 0.5f);
+        if (ImGui::IsKeyPressed('D')) toggle_decision_overlay(s);
     }
 
     if (ImGui::BeginMainMenuBar()) {

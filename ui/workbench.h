@@ -48,6 +48,8 @@ struct WorkbenchOptions {
     bool show_tables = false;  // open the method B tables panel (and wait for the tables)
     bool show_env_bandwidth = false;  // the environment bandwidth hierarchy in the viewport
     int tables_emitter = 0;           // EmitterKind shown there first
+    bool play = false;                // start playing the timeline
+    std::string hint;                 // one line under the viewport: what the view shows
 };
 
 struct ScreenRect {

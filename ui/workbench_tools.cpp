@@ -422,6 +422,7 @@ void draw_help_menu() {
     ImGui::TextUnformatted("Space        play / pause the timeline");
     ImGui::TextUnformatted("Left, Right  previous / next frame");
     ImGui::TextUnformatted("F            fit the image to the viewport");
+    ImGui::TextUnformatted("D            method cache: its decisions over the colour, and back");
     ImGui::TextUnformatted("Wheel        zoom at the cursor");
     ImGui::TextUnformatted("Right-drag   pan");
     ImGui::TextUnformatted("Click        inspect a pixel (every layer, the pixel's trace)");

@@ -113,6 +113,11 @@ void draw_viewport(Workbench::State& s) {
         ImGui::TextWrapped("error: %s", s.error.c_str());
         ImGui::PopStyleColor();
     }
+    if (!s.options.hint.empty()) {
+        ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(0.55f, 0.8f, 1.0f, 1.0f));
+        ImGui::TextWrapped("%s", s.options.hint.c_str());
+        ImGui::PopStyleColor();
+    }
     s.image_rect = {};
     if (!s.shown) {
         ImGui::TextDisabled("rendering frame %d ...", s.frame);
