@@ -268,6 +268,29 @@ void draw_settings_panel_items(Workbench::State& s) {
     }
 }
 
+// Under the frame slider: a tick per recorded frame (green), the frames the running job renders
+// on its way to the one asked for (orange), the frame the viewport holds (white).
+void draw_frame_marks(const Workbench::State& s) {
+    const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
+    const int n = std::max(1, s.scene.frame_count);
+    const float w = (hi.x - lo.x) / float(n), y0 = hi.y - 3.0f, y1 = hi.y;
+    ImDrawList* draw = ImGui::GetWindowDrawList();
+    auto tick = [&](int f, ImU32 colour) {
+        const float x = lo.x + w * float(f);
+        draw->AddRectFilled(ImVec2(x, y0), ImVec2(x + std::max(1.0f, w - 1.0f), y1), colour);
+    };
+    if (s.job && !s.job->done() && s.job_frame >= 0)
+        for (int f = s.job_frame; f <= std::min(s.frame, n - 1); ++f)
+            tick(f, IM_COL32(255, 160, 40, 255));
+    {
+        std::lock_guard<std::mutex> lock(s.results_mutex);
+        for (const auto& [f, r] : s.results)
+            if (f >= 0 && f < n) tick(f, IM_COL32(80, 200, 90, 255));
+    }
+    if (s.shown && !s.shown->environment_view && s.shown->frame < n)
+        tick(s.shown->frame, IM_COL32(255, 255, 255, 255));
+}
+
 void draw_timeline(Workbench::State& s) {
     if (ImGui::Button(s.playing ? "Pause" : "Play")) s.playing = !s.playing;
     ImGui::SameLine();
@@ -279,7 +302,13 @@ void draw_timeline(Workbench::State& s) {
     ImGui::Combo("##stat", &s.stat_index, kStats, 3);
     ImGui::SameLine();
     ImGui::SetNextItemWidth(-1);
-    ImGui::SliderInt("##frame", &s.frame, 0, s.scene.frame_count - 1, "frame %d");
+    // The viewport may hold another frame than the one asked for while that one renders.
+    const int held = s.shown && !s.shown->environment_view ? s.shown->frame : -1;
+    const std::string format = held >= 0 && held != s.frame
+                                   ? "frame %d (showing " + std::to_string(held) + ")"
+                                   : std::string("frame %d");
+    ImGui::SliderInt("##frame", &s.frame, 0, s.scene.frame_count - 1, format.c_str());
+    draw_frame_marks(s);
     // Stats strip: the chosen statistic for every rendered frame (0 where not rendered yet).
     std::vector<float> values(size_t(s.scene.frame_count), 0.0f);
     {
