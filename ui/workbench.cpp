@@ -40,10 +40,13 @@ void restart_renderer(Workbench::State& s) {
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
         s.results.clear();
+        s.recorded.clear();
+        s.store_failure.clear();
     }
     s.shown = nullptr;
     s.shown_frame = -1;
     s.error.clear();
+    s.run_dir.clear();
     if (s.bake) {  // method B: the bake job fills results[0]
         s.renderer.reset();
         start_bake(s);
@@ -55,11 +58,14 @@ void restart_renderer(Workbench::State& s) {
     }
     s.state_next = 0;
     s.cancelled_frame = -1;
-    if (s.config.needs_previous_frames()) {
-        s.run_key = frame_checkpoint_key(
-            output_provenance(s.scene, render_method_info(s.config.method).name,
-                              s.config.settings_group().to_json(), long(s.config.frame.seed)));
-        s.run_dir = run_store_directory(s.run_key);
+    // Every render method's frames go to the run store: a run opened again shows them at once.
+    s.run_key = frame_checkpoint_key(
+        output_provenance(s.scene, render_method_info(s.config.method).name,
+                          s.config.settings_group().to_json(), long(s.config.frame.seed)));
+    s.run_dir = run_store_directory(s.run_key);
+    {
+        std::lock_guard<std::mutex> lock(s.results_mutex);
+        s.recorded = recorded_frame_stats(s.run_dir);
     }
     // References depend on the settings too: drop them with the frames.
     s.reference_job.reset();
@@ -69,6 +75,26 @@ void restart_renderer(Workbench::State& s) {
         s.references.clear();
     }
     s.metrics.clear();
+}
+
+std::shared_ptr<FrameResult> recorded_result(Workbench::State& s, int frame) {
+    if (std::shared_ptr<FrameResult> r = s.results.find(frame)) return r;
+    if (!s.recorded.count(frame) || s.run_dir.empty()) return nullptr;
+    try {
+        auto r = std::make_shared<FrameResult>(read_recorded_frame(s.run_dir, s.run_key, frame));
+        touch_recorded_frame(s.run_dir, frame);  // the run store drops what was used least lately
+        s.results.keep(r);
+        return r;
+    } catch (const Error&) {
+        // Trimmed from the run store, or damaged: the frame renders again.
+        s.recorded.erase(frame);
+        return nullptr;
+    }
+}
+
+void keep_result(Workbench::State& s, FrameResult result) {
+    s.recorded[result.frame] = result.stats;
+    s.results.keep(std::make_shared<FrameResult>(std::move(result)));
 }
 
 namespace {
@@ -105,7 +131,7 @@ void start_job_if_needed(Workbench::State& s) {
     int frame = s.frame;
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
-        if (s.results.count(s.frame)) return;
+        if (s.recorded.count(s.frame)) return;
     }
     // A method with state across frames renders every frame from where it starts up to the one
     // asked for, in order (each kept: scrubbing back is instant). It starts where its state
@@ -140,16 +166,23 @@ void start_job_if_needed(Workbench::State& s) {
             sp->renderer->restore_state(read_frame_checkpoint(restore_file, sp->run_key).state,
                                         restore_file.string());
         FrameResult r = sp->renderer->render(frame, progress);
-        if (sp->renderer->has_state()) {
-            sp->state_next = frame + 1;
-            const fs::path file = frame_checkpoint_path(sp->run_dir, frame + 1);
-            if (every > 0 && (frame + 1) % every == 0 && !fs::exists(file)) {
-                write_frame_checkpoint(file, sp->run_key, frame + 1, sp->renderer->save_state());
-                trim_run_store(sp->run_dir);
+        std::string failure;
+        try {  // a full disk keeps the frame in memory only, and says so
+            if (sp->renderer->has_state()) {
+                sp->state_next = frame + 1;
+                const fs::path file = frame_checkpoint_path(sp->run_dir, frame + 1);
+                if (every > 0 && (frame + 1) % every == 0 && !fs::exists(file))
+                    write_frame_checkpoint(file, sp->run_key, frame + 1,
+                                           sp->renderer->save_state());
             }
+            write_recorded_frame(sp->run_dir, sp->run_key, r);
+            trim_run_store(sp->run_dir);
+        } catch (const std::exception& e) {
+            failure = std::string("frame not kept in the run store: ") + e.what();
         }
         std::lock_guard<std::mutex> lock(sp->results_mutex);
-        sp->results[frame] = std::move(r);
+        sp->store_failure = failure;
+        keep_result(*sp, std::move(r));
     });
 }
 
@@ -160,7 +193,7 @@ void start_env_bandwidth_job(Workbench::State& s) {
     s.env_bandwidth_job = std::make_unique<Job>([sp](Progress&) {
         const EnvironmentMap& env = *sp->scene.environment();
         const EnvBandwidthHierarchy h = EnvBandwidthHierarchy::cached(env);
-        auto result = std::make_unique<FrameResult>();
+        auto result = std::make_shared<FrameResult>();
         result->frame = -1;
         result->environment_view = true;
         result->layers = bandwidth_layers(env, h, 1024);
@@ -284,7 +317,7 @@ void draw_frame_marks(const Workbench::State& s) {
             tick(f, IM_COL32(255, 160, 40, 255));
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
-        for (const auto& [f, r] : s.results)
+        for (const auto& [f, stats] : s.recorded)
             if (f >= 0 && f < n) tick(f, IM_COL32(80, 200, 90, 255));
     }
     if (s.shown && !s.shown->environment_view && s.shown->frame < n)
@@ -313,8 +346,9 @@ void draw_timeline(Workbench::State& s) {
     std::vector<float> values(size_t(s.scene.frame_count), 0.0f);
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
-        for (const auto& [f, r] : s.results)
-            values[size_t(f)] = r.stats[kStats[s.stat_index]].get<float>();
+        for (const auto& [f, stats] : s.recorded)
+            if (f >= 0 && f < s.scene.frame_count)
+                values[size_t(f)] = stats.value(kStats[s.stat_index], 0.0f);
     }
     const float peak = *std::max_element(values.begin(), values.end());
     char overlay[64];
@@ -371,6 +405,7 @@ void Workbench::reset(const WorkbenchOptions& options, Scene* loaded) {
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
         s.results.clear();
+        s.recorded.clear();
         s.references.clear();
     }
     s.metrics.clear();
@@ -388,6 +423,7 @@ void Workbench::reset(const WorkbenchOptions& options, Scene* loaded) {
     s.pick_y = options.inspect_y;
     s.error.clear();
     try {
+        s.results = DecodedFrames(decoded_frames_cap());
         s.scene = loaded ? std::move(*loaded) : load_scene(options.scene);
         s.bake.reset();
         if (!s.device) s.device = std::make_unique<EmbreeDevice>(0);
@@ -510,19 +546,23 @@ void Workbench::draw(int fb_w, int fb_h) {
     if (s.playing && ++s.play_ticks >= 2) {  // advance when the next frame is ready
         s.play_ticks = 0;
         std::lock_guard<std::mutex> lock(s.results_mutex);
-        if (s.results.count(s.frame)) s.frame = (s.frame + 1) % s.scene.frame_count;
+        if (s.recorded.count(s.frame)) s.frame = (s.frame + 1) % s.scene.frame_count;
     }
     start_job_if_needed(s);
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
-        auto it = s.results.find(s.frame);
-        // Keep showing the latest rendered frame at or before the current one.
-        if (it == s.results.end() && !s.results.empty()) {
-            auto lb = s.results.upper_bound(s.frame);
-            if (lb != s.results.begin()) it = std::prev(lb);
-        }
-        const FrameResult* r = it == s.results.end() ? nullptr : &it->second;
-        if (s.show_env_bandwidth) r = s.env_bandwidth.get();
+        // The frame, else the latest recorded frame before it, until it is rendered.
+        int want = -1;
+        auto lb = s.recorded.upper_bound(s.frame);
+        if (lb != s.recorded.begin()) want = std::prev(lb)->first;
+        std::shared_ptr<const FrameResult> r;
+        if (s.show_env_bandwidth)
+            r = s.env_bandwidth;
+        else if (s.results.contains(want) || !s.shown || s.shown->environment_view ||
+                 s.shown->frame != want)
+            r = want >= 0 ? recorded_result(s, want) : nullptr;
+        else
+            r = s.shown;  // still on screen although no longer decoded in memory
         if (r != s.shown || (r && r->frame != s.shown_frame)) {
             s.shown = r;
             s.shown_frame = r ? r->frame : -1;
@@ -606,7 +646,7 @@ void Workbench::cancel_render() {
 std::vector<int> Workbench::recorded_frames() const {
     std::lock_guard<std::mutex> lock(s_->results_mutex);
     std::vector<int> frames;
-    for (const auto& [f, r] : s_->results) frames.push_back(f);
+    for (const auto& [f, stats] : s_->recorded) frames.push_back(f);
     return frames;
 }
 int Workbench::resumed_from() const {

@@ -107,8 +107,8 @@ void start_bake(Workbench::State& s) {
             if (bk.first_pass_ms < 0.0) bk.first_pass_ms = ms_since(t0);
             bk.baked = std::move(baked);
             bk.probes = bk.baker->probes();
+            keep_result(*sp, std::move(r));
             attach_reference(*sp, 0);  // a VPT comparison made earlier stays attached
-            sp->results[0] = std::move(r);
             sp->view_dirty = true;
         }
     });
@@ -201,7 +201,7 @@ void draw_bake_panel(Workbench::State& s) {
             s.references.clear();
             s.reference_note.clear();
             s.metrics.clear();
-            s.results[0] = preview_result(s, b, b.baked);
+            keep_result(s, preview_result(s, b, b.baked));
             s.view_dirty = true;
         }
     }
@@ -257,10 +257,10 @@ void start_bake_reference(Workbench::State& s) {
     LayerSet test;
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
-        auto it = s.results.find(0);
-        if (it != s.results.end() && it->second.layers.find("color")) {
-            test = LayerSet(it->second.layers.width(), it->second.layers.height());
-            test.add("color", LayerKind::Color, 3).data = it->second.layers.get("color").data;
+        const std::shared_ptr<FrameResult> r = s.results.find(0);
+        if (r && r->layers.find("color")) {
+            test = LayerSet(r->layers.width(), r->layers.height());
+            test.add("color", LayerKind::Color, 3).data = r->layers.get("color").data;
         }
     }
     s.reference_job = std::make_unique<Job>([sp, test](Progress& progress) {

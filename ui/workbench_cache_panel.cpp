@@ -39,18 +39,18 @@ void draw_cache_panel(Workbench::State& s) {
     long points = 0, bytes = 0;
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
-        for (const auto& [f, r] : s.results) {
-            if (f < 0 || f >= frames || !r.stats.contains("discards")) continue;
-            series[0].values[size_t(f)] = r.stats.value("pixels_reused", 0.0f);
-            series[1].values[size_t(f)] = r.stats.value("pixels_new", 0.0f);
+        for (const auto& [f, stats] : s.recorded) {
+            if (f < 0 || f >= frames || !stats.contains("discards")) continue;
+            series[0].values[size_t(f)] = stats.value("pixels_reused", 0.0f);
+            series[1].values[size_t(f)] = stats.value("pixels_new", 0.0f);
             size_t k = 2;
             for (int d = int(CacheDecision::DiscardZbuffer); d < kCacheDecisionCount; ++d, ++k)
-                series[k].values[size_t(f)] = r.stats["discards"].value(
+                series[k].values[size_t(f)] = stats["discards"].value(
                     std::string(to_string(CacheDecision(d))).substr(8), 0.0f);
-            series[k].values[size_t(f)] = r.stats.value("merged", 0.0f);
+            series[k].values[size_t(f)] = stats.value("merged", 0.0f);
             if (f == s.frame) {
-                points = r.stats.value("cache_points", 0L);
-                bytes = r.stats.value("cache_bytes", 0L);
+                points = stats.value("cache_points", 0L);
+                bytes = stats.value("cache_bytes", 0L);
             }
         }
     }

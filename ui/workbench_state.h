@@ -18,6 +18,7 @@
 #include "image/metrics.h"
 #include "layer_view.h"
 #include "render/frame_renderer.h"
+#include "render/frame_store.h"
 #include "scene/json_reader.h"
 #include "scene/scene.h"
 #include "session/session_file.h"
@@ -54,7 +55,11 @@ struct Workbench::State {
     int cancelled_frame = -1;
 
     mutable std::mutex results_mutex;
-    std::map<int, FrameResult> results;  // rendered frames: scrubbing back is instant
+    // Frames decoded in memory (capped, render/frame_store.h); the run store on disk keeps every
+    // frame the run rendered (`recorded`: their stats), read back when shown again.
+    DecodedFrames results{0};
+    std::map<int, nlohmann::json> recorded;
+    std::string store_failure;  // why the last frame could not be kept on disk (shown)
 
     int frame = 0;
     bool playing = false;
@@ -70,7 +75,7 @@ struct Workbench::State {
     int shown_frame = -1;
     bool view_dirty = true;
     DisplayRange shown_range;
-    const FrameResult* shown = nullptr;
+    std::shared_ptr<const FrameResult> shown;
 
     float left_w = 0.0f, right_w = 0.0f, bottom_h = 0.0f;  // panel sizes (px; 0: not yet set)
     float zoom = 1.0f;                                     // 1 = fit
@@ -101,7 +106,7 @@ struct Workbench::State {
     // Method A's environment bandwidth hierarchy, shown in the viewport instead of the frame.
     bool show_env_bandwidth = false;
     std::unique_ptr<Job> env_bandwidth_job;
-    std::unique_ptr<FrameResult> env_bandwidth;  // guarded by results_mutex
+    std::shared_ptr<FrameResult> env_bandwidth;  // guarded by results_mutex
     std::string session_path = "freqlab-out/session.json";
     std::string scene_path;           // File > Open scene's field (the scene's file at start)
     BakeSessionPtr bake;              // set when the method is a bake method (surface ... vpt)
@@ -148,6 +153,11 @@ void apply_bake_session(Workbench::State& s, const BakeSessionFile& f);
 void start_bake_reference(Workbench::State& s);
 // Adds reference, error, relative_error to results[frame] and measures (results_mutex held).
 void attach_reference(Workbench::State& s, int frame);
+// A frame's result: decoded in memory, else read from the run store (results_mutex held; null
+// when the frame is not recorded, or its file went: then it is no longer listed as recorded).
+std::shared_ptr<FrameResult> recorded_result(Workbench::State& s, int frame);
+// Keeps a frame just rendered or baked (results_mutex held).
+void keep_result(Workbench::State& s, FrameResult result);
 
 void restart_renderer(Workbench::State& s);
 // Compare, exports and sessions (workbench_tools.cpp).

@@ -34,10 +34,10 @@ const fs::path kExportDir = fs::path("freqlab-out") / "exports";
 
 // Adds reference, error and relative_error layers to a frame's result and measures it.
 void attach_reference(Workbench::State& s, int frame) {
-    auto it = s.results.find(frame);
+    const std::shared_ptr<FrameResult> result = s.results.find(frame);
     auto ref = s.references.find(frame);
-    if (it == s.results.end() || ref == s.references.end()) return;
-    LayerSet& L = it->second.layers;
+    if (!result || ref == s.references.end()) return;
+    LayerSet& L = result->layers;
     const Layer* ref_color = ref->second.find("color");
     if (!ref_color || ref->second.width() != L.width() || ref->second.height() != L.height())
         return;
@@ -222,8 +222,8 @@ std::string stats_csv(const Workbench::State& s) {
     std::set<std::string> columns;
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
-        for (const auto& [f, r] : s.results) {
-            flatten_stats(r.stats, "", rows[f]);
+        for (const auto& [f, stats] : s.recorded) {
+            flatten_stats(stats, "", rows[f]);
             for (const auto& [key, v] : rows[f]) columns.insert(key);
         }
     }

@@ -38,6 +38,14 @@ json frame_checkpoint_key(const json& provenance) {
     return key;
 }
 
+void check_run_key(const json& found, const json& key, const std::string& source) {
+    for (const char* field : kKeyFields)
+        if (found.value(field, json()) != key.value(field, json()))
+            throw Error(source, std::string("key.") + field,
+                        "written by another run: " + found.value(field, json()).dump() +
+                            ", this run has " + key.value(field, json()).dump());
+}
+
 void write_frame_checkpoint(const fs::path& file, const json& key, int frame,
                             const std::string& state) {
     ByteWriter w;
@@ -75,11 +83,7 @@ FrameCheckpoint read_frame_checkpoint(const fs::path& file, const json& key) {
     } catch (const json::exception& e) {
         throw Error(source, "key", std::string("unreadable: ") + e.what());
     }
-    for (const char* field : kKeyFields)
-        if (found.value(field, json()) != key.value(field, json()))
-            throw Error(source, std::string("key.") + field,
-                        "written by another run: " + found.value(field, json()).dump() +
-                            ", this run has " + key.value(field, json()).dump());
+    check_run_key(found, key, source);
     FrameCheckpoint c;
     c.frame = r.get<int32_t>();
     c.state = r.get_string();
@@ -89,45 +93,8 @@ FrameCheckpoint read_frame_checkpoint(const fs::path& file, const json& key) {
 fs::path run_store_directory(const json& key) {
     char hex[24];
     std::snprintf(hex, sizeof hex, "%016llx", (unsigned long long)fnv1a(key.dump()));
-    return cache_directory() / "runs" / hex;
-}
-
-int trim_run_store(const fs::path& keep) {
-    double cap_mb = 4096.0;
-    if (const char* env = std::getenv("FREQLAB_RUN_STORE_MB"); env && *env) cap_mb = std::atof(env);
-    const uint64_t cap = uint64_t(std::max(0.0, cap_mb) * 1024.0 * 1024.0);
-    struct Run {
-        fs::path dir;
-        fs::file_time_type written;
-        uint64_t bytes = 0;
-    };
-    std::vector<Run> runs;
-    uint64_t total = 0;
-    std::error_code ec;
-    for (fs::directory_iterator it(keep.parent_path(), ec), end; !ec && it != end;
-         it.increment(ec)) {
-        if (!it->is_directory()) continue;
-        Run run{it->path(), fs::file_time_type::min(), 0};
-        for (fs::recursive_directory_iterator f(run.dir, ec), fend; !ec && f != fend;
-             f.increment(ec)) {
-            if (!f->is_regular_file()) continue;
-            run.bytes += f->file_size();
-            run.written = std::max(run.written, f->last_write_time());
-        }
-        total += run.bytes;
-        runs.push_back(run);
-    }
-    std::sort(runs.begin(), runs.end(),
-              [](const Run& a, const Run& b) { return a.written < b.written; });
-    int removed = 0;
-    for (const Run& run : runs) {
-        if (total <= cap) break;
-        if (fs::equivalent(run.dir, keep, ec)) continue;
-        fs::remove_all(run.dir, ec);
-        total -= run.bytes;
-        ++removed;
-    }
-    return removed;
+    const char* dir = std::getenv("FREQLAB_RUN_STORE_DIR");
+    return (dir && *dir ? fs::path(dir) : cache_directory() / "runs") / hex;
 }
 
 int latest_frame_checkpoint(const fs::path& dir, int frame) {

@@ -31,6 +31,11 @@ std::filesystem::path frame_checkpoint_path(const std::filesystem::path& dir, in
 // depends on (freqlab, scene_hash, method, settings, seed; not the scene's path).
 nlohmann::json frame_checkpoint_key(const nlohmann::json& provenance);
 
+// Throws Error naming `source` and the first key field (freqlab, scene_hash, method, settings,
+// seed) where `found` differs from `key`: a file another run wrote.
+void check_run_key(const nlohmann::json& found, const nlohmann::json& key,
+                   const std::string& source);
+
 // Written atomically (no half-written file under the name).
 void write_frame_checkpoint(const std::filesystem::path& file, const nlohmann::json& key, int frame,
                             const std::string& state);
@@ -43,12 +48,9 @@ struct FrameCheckpoint {
 // a key that differs from `key` (the field that differs is named).
 FrameCheckpoint read_frame_checkpoint(const std::filesystem::path& file, const nlohmann::json& key);
 
-// Where the workbench keeps a run's checkpoints: $FREQLAB_CACHE_DIR/runs/<hash of the key>.
+// Where the workbench keeps a run's frames and checkpoints: <store>/<hash of the key>, the store
+// being $FREQLAB_RUN_STORE_DIR, else $FREQLAB_CACHE_DIR/runs (base/file_io.h).
 std::filesystem::path run_store_directory(const nlohmann::json& key);
-
-// Keeps the run store under its cap ($FREQLAB_RUN_STORE_MB, default 4096): removes the least
-// recently written runs other than `keep` until the rest fit. Returns the runs removed.
-int trim_run_store(const std::filesystem::path& keep);
 
 // The newest checkpoint in DIR at or before `frame` (-1 when there is none).
 int latest_frame_checkpoint(const std::filesystem::path& dir, int frame);

@@ -14,6 +14,8 @@
 #include <fstream>
 #include <map>
 
+#include <unistd.h>
+
 #include "base/error.h"
 
 #include "gl_host.h"
@@ -291,8 +293,16 @@ TEST(GlWorkbench, SessionRoundTrip) {
 
 int main(int argc, char** argv) {
     unsetenv("DISPLAY");  // the gl label must never need a display
+    // A run store of this process's own: frames recorded by an earlier test run would be shown
+    // instead of rendered. (The cache of tables and references stays shared.)
+    const fs::path cache =
+        fs::temp_directory_path() / ("freqlab_gl_run_store_" + std::to_string(getpid()));
+    setenv("FREQLAB_RUN_STORE_DIR", cache.c_str(), 1);
     ::testing::InitGoogleTest(&argc, argv);
-    return RUN_ALL_TESTS();
+    const int status = RUN_ALL_TESTS();
+    std::error_code ec;
+    fs::remove_all(cache, ec);
+    return status;
 }
 
 // Method B in the workbench: a surface bake of a plane under a constant environment of
@@ -713,7 +723,8 @@ TEST(GlWorkbench, EnvironmentViewIsNoFrame) {
 TEST(GlWorkbench, JumpsResumeFromTheRunsCheckpointsWithTheSameBytes) {
     const fs::path store = fs::temp_directory_path() / "freqlab_gl_run_store";
     fs::remove_all(store);
-    setenv("FREQLAB_CACHE_DIR", store.c_str(), 1);
+    const std::string previous = std::getenv("FREQLAB_RUN_STORE_DIR");
+    setenv("FREQLAB_RUN_STORE_DIR", store.c_str(), 1);
     GlSession gl;
     WorkbenchOptions o = small_scene("color");
     o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/rotor.json";
@@ -728,10 +739,23 @@ TEST(GlWorkbench, JumpsResumeFromTheRunsCheckpointsWithTheSameBytes) {
             first[f] = wb.layers()->get("color").data;
         }
     }
-    size_t checkpoints = 0;
-    for (const auto& e : fs::recursive_directory_iterator(store))
+    size_t checkpoints = 0, frames = 0;
+    for (const auto& e : fs::recursive_directory_iterator(store)) {
         checkpoints += e.path().filename().string().rfind("state_before_", 0) == 0;
+        frames += e.path().extension() == ".json";
+    }
     EXPECT_EQ(checkpoints, 2u) << "before frames 3 and 6";
+    EXPECT_EQ(frames, 7u) << "every frame recorded in the run store";
+    {  // the run opened again: every frame from the store, nothing rendered
+        Workbench wb(o);
+        EXPECT_EQ(wb.recorded_frames(), (std::vector<int>{0, 1, 2, 3, 4, 5, 6}));
+        wb.set_frame(5);
+        run_until_shown(gl, wb);
+        EXPECT_EQ(wb.resumed_from(), -1);
+        EXPECT_EQ(wb.layers()->get("color").data, first[5]);
+    }
+    // Without the recorded frames (trimmed from the store), a jump resumes from a checkpoint.
+    for (const auto& run : fs::directory_iterator(store)) fs::remove_all(run.path() / "frames");
     {
         Workbench wb(o);
         run_until_shown(gl, wb);  // frame 0
@@ -746,7 +770,7 @@ TEST(GlWorkbench, JumpsResumeFromTheRunsCheckpointsWithTheSameBytes) {
         EXPECT_EQ(wb.recorded_frames(), (std::vector<int>{0, 3, 4, 5, 6}));
         EXPECT_EQ(wb.layers()->get("color").data, first[5]);
     }
-    unsetenv("FREQLAB_CACHE_DIR");
+    setenv("FREQLAB_RUN_STORE_DIR", previous.c_str(), 1);
     fs::remove_all(store);
 }
 

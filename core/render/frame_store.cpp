@@ -1,0 +1,259 @@
+#include "render/frame_store.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <regex>
+
+#include "base/byte_stream.h"
+#include "base/error.h"
+#include "base/file_io.h"
+#include "base/hash.h"
+#include "image/layer_codec.h"
+#include "render/frame_checkpoint.h"
+
+namespace freqlab {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr uint32_t kMagic = 0x52464c46;  // "FLFR"
+
+fs::path stats_path(const fs::path& dir, int frame) {
+    return fs::path(recorded_frame_path(dir, frame)).replace_extension(".json");
+}
+
+// $NAME in bytes (`fallback` MB when unset); anything but a number of megabytes >= 0 is
+// refused naming the variable.
+size_t megabytes_from_environment(const char* name, double fallback) {
+    const char* env = std::getenv(name);
+    double mb = fallback;
+    if (env && *env) {
+        char* end = nullptr;
+        mb = std::strtod(env, &end);
+        if (end == env || *end != '\0' || !(mb >= 0.0) || mb > 1e9)
+            throw Error(name, "", std::string("expected megabytes >= 0, got '") + env + "'");
+    }
+    return size_t(mb * 1024.0 * 1024.0);
+}
+
+template <class T>
+size_t vector_bytes(const std::shared_ptr<const std::vector<T>>& v) {
+    return v ? v->size() * sizeof(T) : 0;
+}
+
+void check_records(const std::vector<CacheRecord>& records, const std::string& source) {
+    for (size_t i = 0; i < records.size(); ++i) {
+        const int d = int(records[i].decision);
+        if (d < 0 || d >= kCacheDecisionCount)
+            throw Error(source, "cache_records[" + std::to_string(i) + "].decision",
+                        "unknown decision " + std::to_string(d));
+    }
+}
+
+}  // namespace
+
+fs::path recorded_frame_path(const fs::path& dir, int frame) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%04d.bin", frame);
+    return dir / "frames" / name;
+}
+
+void write_recorded_frame(const fs::path& dir, const json& key, const FrameResult& r) {
+    ByteWriter w;
+    w.put(kMagic);
+    w.put(kRecordedFrameVersion);
+    w.put_string(key.dump());
+    w.put<int32_t>(r.frame);
+    w.put<float>(r.time_s);
+    w.put_string(encode_layers(r.layers));
+    w.put_string(r.stats.dump());
+    w.put<uint8_t>(r.cache_records ? 1 : 0);
+    if (r.cache_records) w.put_vector(*r.cache_records);
+    w.put<uint8_t>(r.sample_positions ? 1 : 0);
+    if (r.sample_positions) w.put_vector(*r.sample_positions);
+    w.put<uint64_t>(fnv1a_words(w.bytes().data(), w.bytes().size()));
+    std::error_code ec;
+    fs::create_directories(dir / "frames", ec);
+    write_text_atomically(recorded_frame_path(dir, r.frame), w.bytes());
+    write_text_atomically(stats_path(dir, r.frame), r.stats.dump());
+}
+
+FrameResult read_recorded_frame(const fs::path& dir, const json& key, int frame) {
+    const fs::path file = recorded_frame_path(dir, frame);
+    const std::string source = file.string();
+    const std::string bytes = read_text_file(file);
+    if (bytes.size() < 2 * sizeof(uint32_t) + sizeof(uint64_t))
+        throw Error(source, "header",
+                    "not a freqlab recorded frame (" + std::to_string(bytes.size()) + " bytes)");
+    ByteReader r(bytes, source, "frame");
+    if (r.get<uint32_t>() != kMagic) throw Error(source, "header", "not a freqlab recorded frame");
+    const uint32_t version = r.get<uint32_t>();
+    if (version != kRecordedFrameVersion)
+        throw Error(source, "version",
+                    "format " + std::to_string(version) + ", this freqlab reads " +
+                        std::to_string(kRecordedFrameVersion));
+    uint64_t stored = 0;
+    std::memcpy(&stored, bytes.data() + bytes.size() - sizeof stored, sizeof stored);
+    if (stored != fnv1a_words(bytes.data(), bytes.size() - sizeof stored))
+        throw Error(source, "checksum", "the file is damaged or truncated");
+    try {
+        check_run_key(json::parse(r.get_string()), key, source);
+    } catch (const json::exception& e) {
+        throw Error(source, "key", std::string("unreadable: ") + e.what());
+    }
+    FrameResult result;
+    result.frame = r.get<int32_t>();
+    if (result.frame != frame)
+        throw Error(
+            source, "frame",
+            "holds frame " + std::to_string(result.frame) + ", expected " + std::to_string(frame));
+    result.time_s = r.get<float>();
+    result.layers = decode_layers(r.get_string(), source);
+    try {
+        result.stats = json::parse(r.get_string());
+    } catch (const json::exception& e) {
+        throw Error(source, "stats", std::string("unreadable: ") + e.what());
+    }
+    if (r.get<uint8_t>()) {
+        auto records = std::make_shared<std::vector<CacheRecord>>(r.get_vector<CacheRecord>());
+        check_records(*records, source);
+        result.cache_records = std::move(records);
+    }
+    if (r.get<uint8_t>())
+        result.sample_positions = std::make_shared<const std::vector<std::pair<int, vec3>>>(
+            r.get_vector<std::pair<int, vec3>>());
+    if (r.remaining() != sizeof(uint64_t))
+        throw Error(source, "frame",
+                    std::to_string(r.remaining() - sizeof(uint64_t)) + " bytes past the end");
+    return result;
+}
+
+std::map<int, json> recorded_frame_stats(const fs::path& dir) {
+    std::map<int, json> stats;
+    const std::regex name(R"(frame_(\d+)\.json)");
+    std::error_code ec;
+    for (fs::directory_iterator it(dir / "frames", ec), end; !ec && it != end; it.increment(ec)) {
+        std::smatch m;
+        const std::string file = it->path().filename().string();
+        if (!std::regex_match(file, m, name)) continue;
+        const int frame = int(std::stol(m[1]));
+        if (!fs::exists(recorded_frame_path(dir, frame))) continue;
+        try {
+            stats[frame] = json::parse(read_text_file(it->path()));
+        } catch (const std::exception&) {
+            // An unreadable record is as good as none: the frame renders again.
+        }
+    }
+    return stats;
+}
+
+size_t frame_result_bytes(const FrameResult& r) {
+    size_t bytes = sizeof(FrameResult);
+    for (const Layer& l : r.layers.layers()) bytes += l.data.size() * sizeof(float);
+    bytes += vector_bytes(r.cache_records) + vector_bytes(r.sample_positions);
+    if (r.cache_snapshot) bytes += r.cache_snapshot->bytes();
+    return bytes;
+}
+
+size_t decoded_frames_cap() {
+    return megabytes_from_environment("FREQLAB_FRAME_MEMORY_MB", 512);
+}
+
+void touch_recorded_frame(const fs::path& dir, int frame) {
+    std::error_code ec;
+    fs::last_write_time(stats_path(dir, frame), fs::file_time_type::clock::now(), ec);
+}
+
+RunStoreTrim trim_run_store(const fs::path& keep) {
+    const uint64_t cap = megabytes_from_environment("FREQLAB_RUN_STORE_MB", 4096);
+    struct Entry {
+        fs::path path;  // a run's folder, or a frame's .json in `keep`
+        fs::file_time_type used;
+        uint64_t bytes = 0;
+    };
+    std::vector<Entry> runs, frames;
+    uint64_t total = 0;
+    std::error_code ec;
+    for (fs::directory_iterator it(keep.parent_path(), ec), end; !ec && it != end;
+         it.increment(ec)) {
+        if (!it->is_directory()) continue;
+        const bool own = fs::equivalent(it->path(), keep, ec);
+        Entry run{it->path(), fs::file_time_type::min(), 0};
+        for (fs::recursive_directory_iterator f(run.path, ec), fend; !ec && f != fend;
+             f.increment(ec)) {
+            if (!f->is_regular_file()) continue;
+            run.bytes += f->file_size();
+            run.used = std::max(run.used, f->last_write_time());
+            if (own && f->path().extension() == ".json") {
+                const fs::path bin = fs::path(f->path()).replace_extension(".bin");
+                frames.push_back(
+                    {f->path(), f->last_write_time(), f->file_size() + fs::file_size(bin, ec)});
+            }
+        }
+        total += run.bytes;
+        if (!own) runs.push_back(run);
+    }
+    auto by_use = [](const Entry& a, const Entry& b) { return a.used < b.used; };
+    std::sort(runs.begin(), runs.end(), by_use);
+    std::sort(frames.begin(), frames.end(), by_use);
+    RunStoreTrim removed;
+    for (const Entry& run : runs) {
+        if (total <= cap) break;
+        fs::remove_all(run.path, ec);
+        total -= run.bytes;
+        ++removed.runs;
+    }
+    for (const Entry& frame : frames) {
+        if (total <= cap) break;
+        fs::remove(frame.path, ec);  // first: the frame is no longer listed as recorded
+        fs::remove(fs::path(frame.path).replace_extension(".bin"), ec);
+        total -= std::min(total, frame.bytes);
+        ++removed.frames;
+    }
+    return removed;
+}
+
+std::shared_ptr<FrameResult> DecodedFrames::find(int frame) {
+    auto it = frames_.find(frame);
+    if (it == frames_.end()) return nullptr;
+    it->second.used = ++clock_;
+    return it->second.result;
+}
+
+void DecodedFrames::keep(std::shared_ptr<FrameResult> result) {
+    const int frame = result->frame;
+    auto old = frames_.find(frame);
+    if (old != frames_.end()) {
+        bytes_ -= old->second.bytes;
+        frames_.erase(old);
+    }
+    Held held{std::move(result), 0, ++clock_};
+    held.bytes = frame_result_bytes(*held.result);
+    bytes_ += held.bytes;
+    frames_[frame] = std::move(held);
+    while (bytes_ > cap_ && frames_.size() > 1) {
+        auto lru = frames_.end();
+        for (auto it = frames_.begin(); it != frames_.end(); ++it)
+            if (it->first != frame && (lru == frames_.end() || it->second.used < lru->second.used))
+                lru = it;
+        bytes_ -= lru->second.bytes;
+        frames_.erase(lru);
+    }
+}
+
+void DecodedFrames::clear() {
+    frames_.clear();
+    bytes_ = 0;
+}
+
+std::vector<int> DecodedFrames::frames() const {
+    std::vector<int> out;
+    for (const auto& [f, held] : frames_) out.push_back(f);
+    return out;
+}
+
+}  // namespace freqlab

@@ -1,0 +1,98 @@
+// A recorded run's frames (issue "The timeline as a recorded run": recorded runs). Every frame a
+// run renders is kept in its folder of the run store (render/frame_checkpoint.h), and a small
+// in-memory set of decoded frames, capped in bytes, holds the ones looked at last: scrubbing
+// reads a frame back instead of rendering it, and reopening the run later is instant.
+//
+// | file                    | content                                                       |
+// |-------------------------|---------------------------------------------------------------|
+// | frames/frame_NNNN.bin   | "FLFR", version, the run's key (JSON), frame, time, layers    |
+// |                         | (image/layer_codec.h: exact), stats, cache records, reused    |
+// |                         | samples' positions; FNV-1a (64-bit words) of all before it   |
+// | frames/frame_NNNN.json  | the frame's stats, written after the .bin: a frame is         |
+// |                         | recorded when its .json exists (the timeline's strip reads    |
+// |                         | these alone)                                                  |
+//
+// Layers are stored raw, not as EXR: reading 37 channels at 640 x 360 back took 205-350 ms
+// through OpenImageIO (uncompressed or ZIP) where the encoded bytes read in a few ms; Export
+// writes the EXR of any frame shown. Not stored: the cache snapshot (the cache before the
+// frame, a copy of the whole cache): a frame read back lists its entries' recorded tests
+// without their stored tuples.
+//
+// | setting                  | default | meaning                                          |
+// |--------------------------|---------|--------------------------------------------------|
+// | $FREQLAB_FRAME_MEMORY_MB | 512     | decoded frames kept in memory (least recently    |
+// |                          |         | used dropped first; the run store keeps them)    |
+// | $FREQLAB_RUN_STORE_MB    | 4096    | the run store on disk (all runs)                 |
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "render/frame_renderer.h"
+
+namespace freqlab {
+
+constexpr uint32_t kRecordedFrameVersion = 1;
+
+// DIR/frames/frame_NNNN.bin (and .json beside it).
+std::filesystem::path recorded_frame_path(const std::filesystem::path& dir, int frame);
+
+// Writes both files atomically (a reader never sees half a frame).
+void write_recorded_frame(const std::filesystem::path& dir, const nlohmann::json& key,
+                          const FrameResult& result);
+// Throws Error naming the file and field: damaged, truncated, another version, another run.
+FrameResult read_recorded_frame(const std::filesystem::path& dir, const nlohmann::json& key,
+                                int frame);
+// Marks a recorded frame used now (its .json's time): trim_run_store drops the least recently
+// used frames first.
+void touch_recorded_frame(const std::filesystem::path& dir, int frame);
+// Every recorded frame's stats (frames whose .json is unreadable are left out).
+std::map<int, nlohmann::json> recorded_frame_stats(const std::filesystem::path& dir);
+
+struct RunStoreTrim {
+    int runs = 0, frames = 0;  // removed
+};
+// Keeps the run store (the folder holding `keep`) under $FREQLAB_RUN_STORE_MB (default 4096):
+// removes the least recently used runs other than `keep`, then `keep`'s least recently used
+// frames (never its checkpoints: they are how its frames come back), until the rest fit.
+RunStoreTrim trim_run_store(const std::filesystem::path& keep);
+
+// What a decoded frame holds in memory: layers, records, positions and cache snapshot.
+size_t frame_result_bytes(const FrameResult& result);
+
+// $FREQLAB_FRAME_MEMORY_MB in bytes (default 512 MB); throws Error naming the variable when it
+// is not a number >= 0.
+size_t decoded_frames_cap();
+
+// Decoded frames in memory, least recently used dropped first past the cap. The frame kept
+// last always stays (a cap below one frame still shows it); frames handed out stay alive with
+// their holders after they are dropped.
+class DecodedFrames {
+  public:
+    explicit DecodedFrames(size_t cap_bytes) : cap_(cap_bytes) {}
+    std::shared_ptr<FrameResult> find(int frame);  // null when not in memory; marks it used
+    bool contains(int frame) const { return frames_.count(frame) > 0; }
+    void keep(std::shared_ptr<FrameResult> result);  // replaces a frame of the same number
+    void clear();
+    size_t bytes() const { return bytes_; }
+    size_t cap() const { return cap_; }
+    std::vector<int> frames() const;
+
+  private:
+    struct Held {
+        std::shared_ptr<FrameResult> result;
+        size_t bytes = 0;
+        uint64_t used = 0;
+    };
+    std::map<int, Held> frames_;
+    size_t cap_ = 0, bytes_ = 0;
+    uint64_t clock_ = 0;
+};
+
+}  // namespace freqlab

@@ -1,0 +1,212 @@
+// Recorded runs (render/frame_store.h; issue "The timeline as a recorded run"): a frame read
+// back from the run store is the frame that was rendered, bit for bit; a file of another run or
+// a damaged one is refused naming the field; the run store and the decoded frames in memory
+// stay under their caps, dropping what was used least lately.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "base/error.h"
+#include "base/file_io.h"
+#include "render/frame_checkpoint.h"
+#include "render/frame_store.h"
+
+using namespace freqlab;
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+json run_key(const std::string& method) {
+    return {{"freqlab", "test"},
+            {"scene_hash", "abc"},
+            {"method", method},
+            {"settings", {{"cache", {{"q_eps_x", 0.5}}}}},
+            {"seed", 7}};
+}
+
+// A frame with every kind of content: colour, a categorical layer with legend and palette, a
+// sparse layer, stats, cache records with each decision, reused samples' positions. `megabytes`
+// of colour data when given.
+FrameResult test_frame(int frame, double megabytes = 0.0) {
+    const int w = megabytes > 0 ? 512 : 7,
+              h = megabytes > 0 ? int(megabytes * 1048576 / (512 * 12)) : 5;
+    FrameResult r;
+    r.frame = frame;
+    r.time_s = 0.25f * frame;
+    r.layers = LayerSet(w, h);
+    Layer& c = r.layers.add("color", LayerKind::Color, 3, "radiance");
+    for (size_t i = 0; i < c.data.size(); ++i) c.data[i] = float(i % 97) * 0.37f + frame;
+    Layer& d = r.layers.add("decision", LayerKind::Categorical, 1, "per pixel");
+    d.legend = {"reused", "new"};
+    d.palette = {vec3(1, 0, 0), vec3(0, 1, 0)};
+    d.data.assign(d.data.size(), 1.0f);
+    Layer& s = r.layers.add("samples", LayerKind::Continuous, 1);
+    s.sparse = true;
+    s.data[3] = -0.0f;
+    s.data[4] = 1e-38f;
+    r.stats = {{"frame", frame}, {"time_ms", 12.5}, {"discards", {{"Angular", 3}}}};
+    auto records = std::make_shared<std::vector<CacheRecord>>();
+    for (int k = 0; k < kCacheDecisionCount; ++k) {
+        CacheRecord rec;
+        rec.object = k;
+        rec.slot = 2 * k;
+        rec.pixel = 3 * k;
+        rec.decision = CacheDecision(k);
+        rec.tests.angular_distance = 0.1 * k;
+        rec.world_position = vec3(float(k), 2.0f, -1.0f);
+        records->push_back(rec);
+    }
+    r.cache_records = records;
+    r.sample_positions = std::make_shared<const std::vector<std::pair<int, vec3>>>(
+        std::vector<std::pair<int, vec3>>{{4, vec3(1, 2, 3)}, {9, vec3(-1, 0, 0.5f)}});
+    return r;
+}
+
+fs::path fresh_dir(const std::string& name) {
+    const fs::path dir = fs::temp_directory_path() / ("freqlab_frame_store_" + name);
+    fs::remove_all(dir);
+    return dir;
+}
+
+std::string field_of(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.field();
+    }
+    return "(no error)";
+}
+
+uint64_t folder_bytes(const fs::path& dir) {
+    uint64_t bytes = 0;
+    for (const auto& e : fs::recursive_directory_iterator(dir))
+        if (e.is_regular_file()) bytes += e.file_size();
+    return bytes;
+}
+
+}  // namespace
+
+TEST(RecordedFrames, ReadBackIsTheFrameWrittenBitForBit) {
+    const fs::path dir = fresh_dir("roundtrip");
+    const FrameResult f = test_frame(3);
+    write_recorded_frame(dir, run_key("cache"), f);
+    const FrameResult back = read_recorded_frame(dir, run_key("cache"), 3);
+    EXPECT_EQ(back.frame, 3);
+    EXPECT_EQ(back.time_s, f.time_s);
+    EXPECT_EQ(back.stats, f.stats);
+    ASSERT_EQ(back.layers.layers().size(), f.layers.layers().size());
+    for (size_t i = 0; i < f.layers.layers().size(); ++i) {
+        const Layer &a = f.layers.layers()[i], &b = back.layers.layers()[i];
+        EXPECT_EQ(b.name, a.name);
+        EXPECT_EQ(b.kind, a.kind);
+        EXPECT_EQ(b.legend, a.legend);
+        EXPECT_EQ(b.palette, a.palette);
+        EXPECT_EQ(b.sparse, a.sparse);
+        ASSERT_EQ(b.data.size(), a.data.size());
+        EXPECT_EQ(std::memcmp(b.data.data(), a.data.data(), a.data.size() * sizeof(float)), 0)
+            << a.name << ": bits differ (-0, denormals)";
+    }
+    ASSERT_TRUE(back.cache_records);
+    ASSERT_EQ(back.cache_records->size(), f.cache_records->size());
+    for (size_t k = 0; k < f.cache_records->size(); ++k) {
+        EXPECT_EQ((*back.cache_records)[k].decision, (*f.cache_records)[k].decision);
+        EXPECT_EQ((*back.cache_records)[k].tests.angular_distance,
+                  (*f.cache_records)[k].tests.angular_distance);
+        EXPECT_EQ((*back.cache_records)[k].world_position, (*f.cache_records)[k].world_position);
+    }
+    ASSERT_TRUE(back.sample_positions);
+    EXPECT_EQ(*back.sample_positions, *f.sample_positions);
+    // The stats the timeline reads without the layers.
+    const auto stats = recorded_frame_stats(dir);
+    ASSERT_EQ(stats.size(), 1u);
+    EXPECT_EQ(stats.at(3), f.stats);
+    fs::remove_all(dir);
+}
+
+TEST(RecordedFrames, AnotherRunsOrADamagedFileIsRefusedNamingTheField) {
+    const fs::path dir = fresh_dir("damage");
+    write_recorded_frame(dir, run_key("cache"), test_frame(1));
+    EXPECT_EQ(field_of([&] { read_recorded_frame(dir, run_key("sparse"), 1); }), "key.method");
+    const fs::path file = recorded_frame_path(dir, 1);
+    std::string bytes = read_text_file(file);
+    // A frame renamed to another number is not that frame.
+    write_text_atomically(recorded_frame_path(dir, 2), bytes);
+    EXPECT_EQ(field_of([&] { read_recorded_frame(dir, run_key("cache"), 2); }), "frame");
+    bytes[bytes.size() / 2] ^= 0x10;
+    write_text_atomically(file, bytes);
+    EXPECT_EQ(field_of([&] { read_recorded_frame(dir, run_key("cache"), 1); }), "checksum");
+    write_text_atomically(file, bytes.substr(0, bytes.size() / 3));
+    EXPECT_EQ(field_of([&] { read_recorded_frame(dir, run_key("cache"), 1); }), "checksum");
+    write_text_atomically(file, "FLFR");
+    EXPECT_EQ(field_of([&] { read_recorded_frame(dir, run_key("cache"), 1); }), "header");
+    fs::remove_all(dir);
+}
+
+// Acceptance 4's cap: other runs go first (least recently used first), then the run's own
+// frames least recently used first; its checkpoints stay; what is left fits the cap.
+TEST(RecordedFrames, RunStoreObeysItsCap) {
+    const fs::path store = fresh_dir("cap") / "runs";
+    const fs::path old_run = store / "old", other = store / "other", mine = store / "mine";
+    for (int f = 0; f < 3; ++f) write_recorded_frame(old_run, run_key("mis"), test_frame(f, 1.0));
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    write_recorded_frame(other, run_key("mis"), test_frame(0, 1.0));
+    write_frame_checkpoint(frame_checkpoint_path(mine, 10), run_key("cache"), 10,
+                           std::string(500000, 'x'));
+    for (int f = 0; f < 8; ++f) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        write_recorded_frame(mine, run_key("cache"), test_frame(f, 1.0));
+    }
+    touch_recorded_frame(mine, 0);  // looked at last: stays
+    setenv("FREQLAB_RUN_STORE_MB", "4.8", 1);
+    const RunStoreTrim removed = trim_run_store(mine);
+    unsetenv("FREQLAB_RUN_STORE_MB");
+    EXPECT_EQ(removed.runs, 2);
+    EXPECT_FALSE(fs::exists(old_run));
+    EXPECT_FALSE(fs::exists(other));
+    EXPECT_LE(folder_bytes(store), uint64_t(4.8 * 1048576));
+    EXPECT_TRUE(fs::exists(frame_checkpoint_path(mine, 10)));
+    const auto kept = recorded_frame_stats(mine);
+    EXPECT_GT(removed.frames, 0);
+    EXPECT_EQ(int(kept.size()), 8 - removed.frames);
+    EXPECT_TRUE(kept.count(0)) << "the frame used last was dropped";
+    EXPECT_TRUE(kept.count(7)) << "the newest frame was dropped";
+    EXPECT_FALSE(kept.count(1)) << "the least recently used frame was kept";
+    for (int f = 0; f < 8; ++f)
+        EXPECT_EQ(fs::exists(recorded_frame_path(mine, f)), kept.count(f) > 0) << f;
+    fs::remove_all(store.parent_path());
+}
+
+TEST(RecordedFrames, DecodedFramesStayUnderTheirCapLeastRecentlyUsedFirst) {
+    const size_t one = frame_result_bytes(test_frame(0, 1.0));
+    DecodedFrames frames(size_t(3.5 * double(one)));
+    for (int f = 0; f < 3; ++f) frames.keep(std::make_shared<FrameResult>(test_frame(f, 1.0)));
+    EXPECT_TRUE(frames.find(0));  // 0 used after 1 and 2
+    const std::shared_ptr<FrameResult> held = frames.find(1);
+    frames.keep(std::make_shared<FrameResult>(test_frame(3, 1.0)));
+    EXPECT_EQ(frames.frames(), (std::vector<int>{0, 1, 3}));  // 2: least recently used
+    EXPECT_LE(frames.bytes(), frames.cap());
+    frames.keep(std::make_shared<FrameResult>(test_frame(4, 1.0)));
+    frames.keep(std::make_shared<FrameResult>(test_frame(5, 1.0)));
+    EXPECT_EQ(frames.frames(), (std::vector<int>{3, 4, 5}));
+    EXPECT_EQ(held->frame, 1) << "a frame handed out outlives its eviction";
+    DecodedFrames tiny(1);
+    tiny.keep(std::make_shared<FrameResult>(test_frame(9)));
+    EXPECT_EQ(tiny.frames(), (std::vector<int>{9})) << "the frame kept last always stays";
+}
+
+TEST(RecordedFrames, CapsFromTheEnvironmentAreNumbersOrRefused) {
+    setenv("FREQLAB_FRAME_MEMORY_MB", "64", 1);
+    EXPECT_EQ(decoded_frames_cap(), size_t(64) << 20);
+    setenv("FREQLAB_FRAME_MEMORY_MB", "lots", 1);
+    try {
+        decoded_frames_cap();
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("FREQLAB_FRAME_MEMORY_MB"), std::string::npos);
+    }
+    unsetenv("FREQLAB_FRAME_MEMORY_MB");
+}
