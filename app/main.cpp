@@ -51,6 +51,22 @@ int headless_fallback(const std::string& scene, int frame) {
 #endif
 }
 
+#ifdef FREQLAB_HAS_UI
+// `bench --study scrub`: method cache on the scene at --size, --set applied.
+int run_scrub_study(const freqlab::BenchArgs& a, int jumps) {
+    const auto [w, h] = freqlab::parse_size(a.size, "--size");
+    freqlab::ui::ScrubBenchOptions o;
+    o.workbench.scene = a.scene;
+    o.workbench.method = "cache";
+    o.workbench.settings = {"frame.width=" + std::to_string(w),
+                            "frame.height=" + std::to_string(h)};
+    o.workbench.settings.insert(o.workbench.settings.end(), a.sets.begin(), a.sets.end());
+    o.jumps = jumps;
+    o.out = a.out;
+    return freqlab::ui::run_scrub_bench(o);
+}
+#endif
+
 }  // namespace
 
 // Ctrl-C / SIGTERM: the command stops at its next checkpoint (files written so far are
@@ -211,7 +227,11 @@ int main(int argc, char** argv) {
         "equal-time MIS on one frame (time, rays, RMSE); cache: the cache vs sparse and "
         "equal-time MIS over frames; cache-ablation: temporal test on/off; bake: method B; "
         "bake-thickness: method B's error against VPT as the media thicken; stability: every "
-        "setting and scene extreme over all methods, counting non-finite values per layer");
+        "setting and scene extreme over all methods, counting non-finite values per layer; "
+        "scrub: the workbench (offscreen) records a run of method cache and times --jumps "
+        "random jumps across it");
+    int scrub_jumps = 100;
+    bench->add_option("--jumps", scrub_jumps, "scrub study: random jumps timed");
     bench->add_option("--frames", ba.frames, "cache studies: A:B (default: all frames)");
     bench->add_option("--error-every", ba.error_every,
                       "cache studies: RMSE against the reference every k-th frame");
@@ -256,6 +276,13 @@ int main(int argc, char** argv) {
             return freqlab::run_tables_query(tq);
         }
         if (*bake) return freqlab::run_bake(bk);
+        if (*bench && ba.study == "scrub") {
+#ifdef FREQLAB_HAS_UI
+            return run_scrub_study(ba, scrub_jumps);
+#else
+            throw freqlab::Error("--study", "scrub", "needs the workbench (built without UI)");
+#endif
+        }
         if (*bench) return freqlab::run_bench(ba);
             // `freqlab` alone, or `freqlab gui ...`
 #ifdef FREQLAB_HAS_UI

@@ -60,6 +60,9 @@ FrameResult test_frame(int frame, double megabytes = 0.0) {
         rec.world_position = vec3(float(k), 2.0f, -1.0f);
         records->push_back(rec);
     }
+    CacheRecord outside;  // lands outside the image: not stored (the inspector never lists it)
+    outside.pixel = -1;
+    records->push_back(outside);
     r.cache_records = records;
     r.sample_positions = std::make_shared<const std::vector<std::pair<int, vec3>>>(
         std::vector<std::pair<int, vec3>>{{4, vec3(1, 2, 3)}, {9, vec3(-1, 0, 0.5f)}});
@@ -111,8 +114,8 @@ TEST(RecordedFrames, ReadBackIsTheFrameWrittenBitForBit) {
             << a.name << ": bits differ (-0, denormals)";
     }
     ASSERT_TRUE(back.cache_records);
-    ASSERT_EQ(back.cache_records->size(), f.cache_records->size());
-    for (size_t k = 0; k < f.cache_records->size(); ++k) {
+    ASSERT_EQ(back.cache_records->size(), size_t(kCacheDecisionCount));
+    for (size_t k = 0; k < back.cache_records->size(); ++k) {
         EXPECT_EQ((*back.cache_records)[k].decision, (*f.cache_records)[k].decision);
         EXPECT_EQ((*back.cache_records)[k].tests.angular_distance,
                   (*f.cache_records)[k].tests.angular_distance);
@@ -136,11 +139,10 @@ TEST(RecordedFrames, AnotherRunsOrADamagedFileIsRefusedNamingTheField) {
     // A frame renamed to another number is not that frame.
     write_text_atomically(recorded_frame_path(dir, 2), bytes);
     EXPECT_EQ(field_of([&] { read_recorded_frame(dir, run_key("cache"), 2); }), "frame");
-    bytes[bytes.size() / 2] ^= 0x10;
-    write_text_atomically(file, bytes);
-    EXPECT_EQ(field_of([&] { read_recorded_frame(dir, run_key("cache"), 1); }), "checksum");
-    write_text_atomically(file, bytes.substr(0, bytes.size() / 3));
-    EXPECT_EQ(field_of([&] { read_recorded_frame(dir, run_key("cache"), 1); }), "checksum");
+    for (size_t cut : {bytes.size() / 3, bytes.size() - 1}) {
+        write_text_atomically(file, bytes.substr(0, cut));
+        EXPECT_EQ(field_of([&] { read_recorded_frame(dir, run_key("cache"), 1); }), "size");
+    }
     write_text_atomically(file, "FLFR");
     EXPECT_EQ(field_of([&] { read_recorded_frame(dir, run_key("cache"), 1); }), "header");
     fs::remove_all(dir);

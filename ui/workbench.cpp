@@ -16,6 +16,7 @@
 
 #include "base/error.h"
 #include "base/file_io.h"
+#include "base/heap_reuse.h"
 #include "base/job.h"
 #include "gl_host.h"
 #include "glfw_host.h"
@@ -649,6 +650,16 @@ std::vector<int> Workbench::recorded_frames() const {
     for (const auto& [f, stats] : s_->recorded) frames.push_back(f);
     return frames;
 }
+int Workbench::frame_count() const {
+    return s_->scene.frame_count;
+}
+std::string Workbench::run_directory() const {
+    return s_->run_dir.string();
+}
+Workbench::DecodedMemory Workbench::decoded_memory() const {
+    std::lock_guard<std::mutex> lock(s_->results_mutex);
+    return {s_->results.frames(), s_->results.bytes(), s_->results.cap()};
+}
 int Workbench::resumed_from() const {
     return s_->job_resumed_from;
 }
@@ -812,20 +823,6 @@ int run_loop(GlHost& host, Workbench& wb, const WorkbenchOptions& options, bool 
     }
 }
 
-struct ImGuiSession {
-    ImGuiSession() {
-        IMGUI_CHECKVERSION();
-        ImGui::CreateContext();
-        ImGui::GetIO().IniFilename = nullptr;
-        ImGui::StyleColorsDark();
-    }
-    ~ImGuiSession() { ImGui::DestroyContext(); }
-};
-
-}  // namespace
-
-namespace {
-
 int run_on_host(GlHost& host, const WorkbenchOptions& options, bool interactive) {
     apply_ui_scale(options.ui_scale > 0.0f ? options.ui_scale : host.content_scale());
     ImGui_ImplOpenGL3_Init("#version 330");
@@ -840,6 +837,16 @@ int run_on_host(GlHost& host, const WorkbenchOptions& options, bool interactive)
 }
 
 }  // namespace
+
+ImGuiSession::ImGuiSession() {
+    IMGUI_CHECKVERSION();
+    ImGui::CreateContext();
+    ImGui::GetIO().IniFilename = nullptr;
+    ImGui::StyleColorsDark();
+}
+ImGuiSession::~ImGuiSession() {
+    ImGui::DestroyContext();
+}
 
 void apply_ui_scale(float scale) {
     if (!(scale > 0.0f) || scale == 1.0f) return;
@@ -856,6 +863,7 @@ void apply_ui_scale(float scale) {
 }
 
 int run_workbench(const WorkbenchOptions& options) {
+    keep_freed_memory_for_reuse();
     ImGuiSession imgui;
     GlfwHost host(options.width, options.height, "freqlab — " + options.scene);
     return run_on_host(host, options, true);
@@ -865,6 +873,7 @@ int run_headless(const WorkbenchOptions& options) {
     if (options.screenshot.empty())
         throw Error("--headless", "--screenshot",
                     "the headless workbench needs --screenshot OUT.png");
+    keep_freed_memory_for_reuse();
     ImGuiSession imgui;
     OsMesaHost host(options.width, options.height);
     return run_on_host(host, options, false);

@@ -79,6 +79,14 @@ class Workbench {
     // Something on screen changes without input: a job runs, playback, a frame not shown yet.
     bool busy() const;
     std::vector<int> recorded_frames() const;  // frames rendered and kept, in order
+    int frame_count() const;                   // the scene's
+    // The run store folder of the run shown (render/frame_store.h; empty for bakes).
+    std::string run_directory() const;
+    struct DecodedMemory {
+        std::vector<int> frames;  // decoded in memory now
+        size_t bytes = 0, cap = 0;
+    };
+    DecodedMemory decoded_memory() const;
     void cancel_render();  // as the status line's cancel: stops the job, starts none again
     // The checkpoint the last render job of a stateful method started from (-1: none).
     int resumed_from() const;
@@ -138,6 +146,14 @@ class Workbench {
     std::unique_ptr<State> s_;
 };
 
+// An ImGui context for a host's lifetime (dark style, no ini file).
+struct ImGuiSession {
+    ImGuiSession();
+    ~ImGuiSession();
+    ImGuiSession(const ImGuiSession&) = delete;
+    ImGuiSession& operator=(const ImGuiSession&) = delete;
+};
+
 // Scales ImGui's style and loads its font at 13 px x scale (DejaVu Sans Mono when the scale is
 // not 1; the default font otherwise). Call before the first frame.
 void apply_ui_scale(float scale);
@@ -147,5 +163,15 @@ void render_ui_frame(GlHost& host, Workbench& workbench);
 
 int run_workbench(const WorkbenchOptions& options);  // a GLFW window (needs a display)
 int run_headless(const WorkbenchOptions& options);   // OSMesa; writes options.screenshot
+
+// `freqlab bench --study scrub` (ui/scrub_bench.cpp): records a run in the headless workbench,
+// opens it again, and times random jumps across it; writes OUT/bench_scrub.json.
+struct ScrubBenchOptions {
+    WorkbenchOptions workbench;  // scene, method, settings
+    int jumps = 100;
+    uint64_t seed = 1;
+    std::string out = "freqlab-out/bench";
+};
+int run_scrub_bench(const ScrubBenchOptions& options);
 
 }  // namespace freqlab::ui

@@ -24,12 +24,16 @@ void ByteReader::check_left(uint64_t count, size_t size) const {
 }
 
 std::string ByteReader::get_string() {
+    return std::string(get_view());
+}
+
+std::string_view ByteReader::get_view() {
     const uint64_t n = get<uint64_t>();
     if (n > remaining())
         throw Error(source_, field_,
                     "a string of " + std::to_string(n) + " bytes with " +
                         std::to_string(remaining()) + " left");
-    std::string s(bytes_.data() + at_, size_t(n));
+    const std::string_view s = bytes_.substr(at_, size_t(n));
     at_ += size_t(n);
     return s;
 }

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace freqlab {
@@ -36,7 +37,8 @@ class ByteWriter {
 class ByteReader {
   public:
     // `field` names what the bytes hold in errors ("layers", "cache").
-    ByteReader(const std::string& bytes, std::string source, std::string field = "layers")
+    // `bytes` must outlive the reader (a string, a mapped file).
+    ByteReader(std::string_view bytes, std::string source, std::string field = "layers")
         : bytes_(bytes), source_(std::move(source)), field_(std::move(field)) {}
     template <class T>
     T get() {
@@ -46,6 +48,7 @@ class ByteReader {
     }
     void get_bytes(void* out, size_t n);  // throws Error when fewer than n bytes are left
     std::string get_string();
+    std::string_view get_view();  // a string's bytes in place (valid as long as `bytes`)
     template <class T>
     std::vector<T> get_vector() {
         const uint64_t n = get<uint64_t>();
@@ -59,7 +62,7 @@ class ByteReader {
   private:
     // Throws when `count` elements of `size` bytes cannot be left (before allocating them).
     void check_left(uint64_t count, size_t size) const;
-    const std::string& bytes_;
+    std::string_view bytes_;
     std::string source_, field_;
     size_t at_ = 0;
 };

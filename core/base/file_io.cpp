@@ -1,5 +1,8 @@
 #include "base/file_io.h"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <cerrno>
 #include <cstdlib>
@@ -59,6 +62,32 @@ std::string read_text_file(const fs::path& path) {
     if (!in.read(text.data(), std::streamsize(text.size())))
         throw Error(path.string(), "", "could not read the whole file");
     return text;
+}
+
+MappedFile::MappedFile(const fs::path& path) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        throw Error(path.string(), "", "cannot open file (does it exist and is it readable?)");
+    struct stat st {};
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        ::close(fd);
+        throw Error(path.string(), "", "not a regular file");
+    }
+    size_ = size_t(st.st_size);
+    if (size_ > 0) {
+        void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+        if (p == MAP_FAILED) {
+            const std::string why = std::strerror(errno);
+            ::close(fd);
+            throw Error(path.string(), "", "cannot map the file: " + why);
+        }
+        data_ = static_cast<const char*>(p);
+    }
+    ::close(fd);  // the mapping stays valid
+}
+
+MappedFile::~MappedFile() {
+    if (data_) ::munmap(const_cast<char*>(data_), size_);
 }
 
 fs::path cache_directory() {

@@ -32,7 +32,7 @@ std::string encode_layers(const LayerSet& layers) {
     return std::move(w.bytes());
 }
 
-LayerSet decode_layers(const std::string& bytes, const std::string& source) {
+LayerSet decode_layers(std::string_view bytes, const std::string& source) {
     ByteReader r(bytes, source);
     if (r.get<uint32_t>() != kMagic) throw Error(source, "layers", "not an encoded LayerSet");
     const int width = r.get<int32_t>(), height = r.get<int32_t>();

@@ -13,6 +13,6 @@ namespace freqlab {
 
 std::string encode_layers(const LayerSet& layers);
 // Throws Error naming `source` when the bytes are not a whole encoded LayerSet.
-LayerSet decode_layers(const std::string& bytes, const std::string& source);
+LayerSet decode_layers(std::string_view bytes, const std::string& source);
 
 }  // namespace freqlab

@@ -9,7 +9,6 @@
 #include "base/byte_stream.h"
 #include "base/error.h"
 #include "base/file_io.h"
-#include "base/hash.h"
 #include "image/layer_codec.h"
 #include "render/frame_checkpoint.h"
 
@@ -72,10 +71,17 @@ void write_recorded_frame(const fs::path& dir, const json& key, const FrameResul
     w.put_string(encode_layers(r.layers));
     w.put_string(r.stats.dump());
     w.put<uint8_t>(r.cache_records ? 1 : 0);
-    if (r.cache_records) w.put_vector(*r.cache_records);
+    if (r.cache_records) {
+        // Only the entries landing on the image: a frame read back serves the inspector, which
+        // lists the entries near a pixel (a third of rotor's records land outside).
+        std::vector<CacheRecord> on_image;
+        for (const CacheRecord& c : *r.cache_records)
+            if (c.pixel >= 0) on_image.push_back(c);
+        w.put_vector(on_image);
+    }
     w.put<uint8_t>(r.sample_positions ? 1 : 0);
     if (r.sample_positions) w.put_vector(*r.sample_positions);
-    w.put<uint64_t>(fnv1a_words(w.bytes().data(), w.bytes().size()));
+    w.put<uint64_t>(w.bytes().size());
     std::error_code ec;
     fs::create_directories(dir / "frames", ec);
     write_text_atomically(recorded_frame_path(dir, r.frame), w.bytes());
@@ -85,7 +91,8 @@ void write_recorded_frame(const fs::path& dir, const json& key, const FrameResul
 FrameResult read_recorded_frame(const fs::path& dir, const json& key, int frame) {
     const fs::path file = recorded_frame_path(dir, frame);
     const std::string source = file.string();
-    const std::string bytes = read_text_file(file);
+    const MappedFile mapped(file);
+    const std::string_view bytes = mapped.bytes();
     if (bytes.size() < 2 * sizeof(uint32_t) + sizeof(uint64_t))
         throw Error(source, "header",
                     "not a freqlab recorded frame (" + std::to_string(bytes.size()) + " bytes)");
@@ -98,8 +105,8 @@ FrameResult read_recorded_frame(const fs::path& dir, const json& key, int frame)
                         std::to_string(kRecordedFrameVersion));
     uint64_t stored = 0;
     std::memcpy(&stored, bytes.data() + bytes.size() - sizeof stored, sizeof stored);
-    if (stored != fnv1a_words(bytes.data(), bytes.size() - sizeof stored))
-        throw Error(source, "checksum", "the file is damaged or truncated");
+    if (stored != bytes.size() - sizeof stored)
+        throw Error(source, "size", "the file is truncated or damaged");
     try {
         check_run_key(json::parse(r.get_string()), key, source);
     } catch (const json::exception& e) {
@@ -112,7 +119,7 @@ FrameResult read_recorded_frame(const fs::path& dir, const json& key, int frame)
             source, "frame",
             "holds frame " + std::to_string(result.frame) + ", expected " + std::to_string(frame));
     result.time_s = r.get<float>();
-    result.layers = decode_layers(r.get_string(), source);
+    result.layers = decode_layers(r.get_view(), source);
     try {
         result.stats = json::parse(r.get_string());
     } catch (const json::exception& e) {
@@ -160,7 +167,7 @@ size_t frame_result_bytes(const FrameResult& r) {
 }
 
 size_t decoded_frames_cap() {
-    return megabytes_from_environment("FREQLAB_FRAME_MEMORY_MB", 512);
+    return megabytes_from_environment("FREQLAB_FRAME_MEMORY_MB", 256);
 }
 
 void touch_recorded_frame(const fs::path& dir, int frame) {
@@ -169,7 +176,7 @@ void touch_recorded_frame(const fs::path& dir, int frame) {
 }
 
 RunStoreTrim trim_run_store(const fs::path& keep) {
-    const uint64_t cap = megabytes_from_environment("FREQLAB_RUN_STORE_MB", 4096);
+    const uint64_t cap = megabytes_from_environment("FREQLAB_RUN_STORE_MB", 16384);
     struct Entry {
         fs::path path;  // a run's folder, or a frame's .json in `keep`
         fs::file_time_type used;

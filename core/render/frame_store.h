@@ -7,11 +7,16 @@
 // |-------------------------|---------------------------------------------------------------|
 // | frames/frame_NNNN.bin   | "FLFR", version, the run's key (JSON), frame, time, layers    |
 // |                         | (image/layer_codec.h: exact), stats, cache records, reused    |
-// |                         | samples' positions; FNV-1a (64-bit words) of all before it   |
+// |                         | samples' positions; the size of all before it                 |
+// |                         | (records: the entries landing on the image, what the          |
+// |                         | inspector lists)                                              |
 // | frames/frame_NNNN.json  | the frame's stats, written after the .bin: a frame is         |
 // |                         | recorded when its .json exists (the timeline's strip reads    |
 // |                         | these alone)                                                  |
 //
+// No checksum over the payload: hashing 55 MB from memory took 25-30 ms of a 44 ms read (perf),
+// the one cost a jump of the timeline pays; files are written atomically by this process, every
+// length and enum is checked, and a truncated file is refused by its size.
 // Layers are stored raw, not as EXR: reading 37 channels at 640 x 360 back took 205-350 ms
 // through OpenImageIO (uncompressed or ZIP) where the encoded bytes read in a few ms; Export
 // writes the EXR of any frame shown. Not stored: the cache snapshot (the cache before the
@@ -20,9 +25,16 @@
 //
 // | setting                  | default | meaning                                          |
 // |--------------------------|---------|--------------------------------------------------|
-// | $FREQLAB_FRAME_MEMORY_MB | 512     | decoded frames kept in memory (least recently    |
-// |                          |         | used dropped first; the run store keeps them)    |
-// | $FREQLAB_RUN_STORE_MB    | 4096    | the run store on disk (all runs)                 |
+// | $FREQLAB_FRAME_MEMORY_MB | 256     | decoded frames kept in memory (least recently    |
+// |                          |         | used dropped first; the run store keeps them):   |
+// |                          |         | 4 frames of method cache at 640 x 360. Memory    |
+// |                          |         | first touched costs ~10 us a page here: every    |
+// |                          |         | frame decoded before the cap is reached took     |
+// |                          |         | 130-220 ms, after it (freed memory reused,       |
+// |                          |         | base/heap_reuse.h) 40-50 ms. A random jump finds |
+// |                          |         | its frame in memory rarely whatever the cap.     |
+// | $FREQLAB_RUN_STORE_MB    | 16384   | the run store on disk (all runs): 120 frames of  |
+// |                          |         | method cache at 640 x 360 take ~4.5 GB           |
 #pragma once
 
 #include <cstddef>
@@ -38,7 +50,7 @@
 
 namespace freqlab {
 
-constexpr uint32_t kRecordedFrameVersion = 1;
+constexpr uint32_t kRecordedFrameVersion = 2;
 
 // DIR/frames/frame_NNNN.bin (and .json beside it).
 std::filesystem::path recorded_frame_path(const std::filesystem::path& dir, int frame);
@@ -58,7 +70,7 @@ std::map<int, nlohmann::json> recorded_frame_stats(const std::filesystem::path& 
 struct RunStoreTrim {
     int runs = 0, frames = 0;  // removed
 };
-// Keeps the run store (the folder holding `keep`) under $FREQLAB_RUN_STORE_MB (default 4096):
+// Keeps the run store (the folder holding `keep`) under $FREQLAB_RUN_STORE_MB (default 16384):
 // removes the least recently used runs other than `keep`, then `keep`'s least recently used
 // frames (never its checkpoints: they are how its frames come back), until the rest fit.
 RunStoreTrim trim_run_store(const std::filesystem::path& keep);
@@ -66,7 +78,7 @@ RunStoreTrim trim_run_store(const std::filesystem::path& keep);
 // What a decoded frame holds in memory: layers, records, positions and cache snapshot.
 size_t frame_result_bytes(const FrameResult& result);
 
-// $FREQLAB_FRAME_MEMORY_MB in bytes (default 512 MB); throws Error naming the variable when it
+// $FREQLAB_FRAME_MEMORY_MB in bytes (default 256 MB); throws Error naming the variable when it
 // is not a number >= 0.
 size_t decoded_frames_cap();
 

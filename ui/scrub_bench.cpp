@@ -1,0 +1,165 @@
+// `freqlab bench --study scrub` (issue "The timeline as a recorded run", acceptances 1 and 4):
+// the workbench on an offscreen host (OSMesa), as a researcher scrubs.
+//   1. record: the run's last frame is asked for; the workbench renders every frame in order
+//      into the run store (skipped when the store holds them already: reported);
+//   2. reopen: a new workbench on the same run, time to its first frame on screen;
+//   3. jumps: --jumps random frames (seeded, never the frame shown), each timed from
+//      set_frame() to the UI frame that draws it, GL finished (the workbench loop).
+// Reported: the jumps' p50 / p95 / max, how many were read from the run store, resident memory
+// (now and peak) after recording and after the jumps, the decoded frames' bytes, the run
+// store's size on disk.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "base/error.h"
+#include "base/file_io.h"
+#include "base/heap_reuse.h"
+#include "osmesa_host.h"
+#include "workbench.h"
+
+#include <imgui_impl_opengl3.h>
+
+namespace freqlab::ui {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double ms_since(Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+// VmRSS / VmHWM of this process in MB (Linux; 0 elsewhere).
+double status_mb(const char* field) {
+    std::ifstream in("/proc/self/status");
+    std::string line;
+    while (std::getline(in, line))
+        if (line.rfind(field, 0) == 0) return std::atof(line.c_str() + std::strlen(field)) / 1024.0;
+    return 0.0;
+}
+
+double percentile(std::vector<double> v, double q) {
+    std::sort(v.begin(), v.end());
+    const double at = q * double(v.size() - 1);
+    const size_t i = size_t(at);
+    return i + 1 < v.size() ? v[i] + (at - double(i)) * (v[i + 1] - v[i]) : v[i];
+}
+
+uint64_t folder_bytes(const fs::path& dir) {
+    uint64_t bytes = 0;
+    std::error_code ec;
+    for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+        if (it->is_regular_file()) bytes += it->file_size();
+    return bytes;
+}
+
+// UI frames until the workbench shows the frame asked for (a render job waited for, not polled).
+void until_shown(OsMesaHost& host, Workbench& wb) {
+    for (int i = 0; i < 100000 && !wb.frame_shown(); ++i) {
+        if (!wb.error().empty()) throw Error("bench --study scrub", "", wb.error());
+        render_ui_frame(host, wb);
+        host.end_frame();
+        if (!wb.frame_shown()) wb.wait_for_render();
+    }
+    if (!wb.frame_shown()) throw Error("bench --study scrub", "", "the frame was never shown");
+}
+
+json memory_now(const Workbench& wb) {
+    const Workbench::DecodedMemory m = wb.decoded_memory();
+    return {{"resident_mb", status_mb("VmRSS:")},
+            {"peak_resident_mb", status_mb("VmHWM:")},
+            {"decoded_frames", m.frames.size()},
+            {"decoded_frames_mb", double(m.bytes) / 1048576.0},
+            {"decoded_frames_cap_mb", double(m.cap) / 1048576.0}};
+}
+
+}  // namespace
+
+int run_scrub_bench(const ScrubBenchOptions& o) {
+    if (o.jumps < 1) throw Error("--jumps", std::to_string(o.jumps), "expected at least 1");
+    keep_freed_memory_for_reuse();  // as the workbench does
+    ImGuiSession imgui;
+    OsMesaHost host(o.workbench.width, o.workbench.height);
+    ImGui_ImplOpenGL3_Init("#version 330");
+    json report;
+    {
+        WorkbenchOptions wo = o.workbench;
+        wo.show_timings = false;
+        Workbench recorder(wo);
+        if (!recorder.error().empty()) throw Error(wo.scene, "", recorder.error());
+        const int frames = int(recorder.frame_count());
+        const size_t before = recorder.recorded_frames().size();
+        const auto t0 = Clock::now();
+        recorder.set_frame(frames - 1);
+        until_shown(host, recorder);
+        const double record_ms = ms_since(t0);
+        const fs::path run = recorder.run_directory();
+        report["scene"] = wo.scene;
+        report["method"] = recorder.method();
+        report["frames"] = frames;
+        report["record"] = {{"frames_already_recorded", before},
+                            {"ms", record_ms},
+                            {"memory", memory_now(recorder)},
+                            {"run_store", run.string()},
+                            {"run_store_mb", double(folder_bytes(run)) / 1048576.0}};
+        std::fprintf(stderr, "recorded %d frames in %.1f s (%zu were in the run store)\n", frames,
+                     record_ms / 1000.0, before);
+    }
+    WorkbenchOptions wo = o.workbench;
+    wo.show_timings = false;
+    wo.frame = 0;
+    const auto t_open = Clock::now();
+    Workbench wb(wo);
+    until_shown(host, wb);
+    const double reopen_ms = ms_since(t_open);
+    const int frames = int(wb.frame_count());
+    std::mt19937_64 rng(o.seed);
+    std::vector<double> times;
+    int from_store = 0;
+    for (int k = 0; k < o.jumps; ++k) {
+        int target = wb.frame();
+        while (target == wb.frame())
+            target = int(std::uniform_int_distribution<int>(0, frames - 1)(rng));
+        const std::vector<int> held = wb.decoded_memory().frames;
+        from_store += std::find(held.begin(), held.end(), target) == held.end();
+        const auto t0 = Clock::now();
+        wb.set_frame(target);
+        until_shown(host, wb);
+        times.push_back(ms_since(t0));
+    }
+    report["reopen_ms"] = reopen_ms;
+    report["jumps"] = {{"count", o.jumps},
+                       {"seed", o.seed},
+                       {"read_from_run_store", from_store},
+                       {"p50_ms", percentile(times, 0.5)},
+                       {"p95_ms", percentile(times, 0.95)},
+                       {"max_ms", percentile(times, 1.0)},
+                       {"ms", times}};
+    report["after_jumps"] = memory_now(wb);
+    ImGui_ImplOpenGL3_Shutdown();
+    fs::create_directories(o.out);
+    write_text_atomically(fs::path(o.out) / "bench_scrub.json", report.dump(2));
+    std::printf(
+        "scrub: %d jumps over %d recorded frames (%d read from the run store): p50 %.1f ms, "
+        "p95 %.1f ms, max %.1f ms; reopen %.0f ms; resident %.0f MB (peak %.0f MB), decoded "
+        "frames %.0f MB; run store %.0f MB\n",
+        o.jumps, frames, from_store, percentile(times, 0.5), percentile(times, 0.95),
+        percentile(times, 1.0), reopen_ms, report["after_jumps"]["resident_mb"].get<double>(),
+        report["after_jumps"]["peak_resident_mb"].get<double>(),
+        report["after_jumps"]["decoded_frames_mb"].get<double>(),
+        report["record"]["run_store_mb"].get<double>());
+    std::printf("wrote %s\n", (fs::path(o.out) / "bench_scrub.json").c_str());
+    return 0;
+}
+
+}  // namespace freqlab::ui
