@@ -354,8 +354,20 @@ void draw_timeline(Workbench::State& s) {
     const float peak = *std::max_element(values.begin(), values.end());
     char overlay[64];
     std::snprintf(overlay, sizeof overlay, "%s (max %.4g)", kStats[s.stat_index], peak);
-    ImGui::PlotHistogram("##strip", values.data(), int(values.size()), 0, overlay, 0.0f,
-                         peak > 0 ? peak : 1.0f, ImVec2(ImGui::GetContentRegionAvail().x, 44));
+    const std::vector<float> a_values = run_a_strip(s, kStats[s.stat_index]);
+    const float a_peak =
+        a_values.empty() ? 0.0f : *std::max_element(a_values.begin(), a_values.end());
+    const float scale = std::max({peak, a_peak, 1e-30f});
+    ImGui::PlotHistogram("##strip", values.data(), int(values.size()), 0,
+                         (a_values.empty() ? overlay : std::string("B: ") + overlay).c_str(), 0.0f,
+                         scale,
+                         ImVec2(ImGui::GetContentRegionAvail().x, a_values.empty() ? 44 : 30));
+    if (!a_values.empty()) {  // A/B: run A's statistic on the same scale, under B's
+        char label[64];
+        std::snprintf(label, sizeof label, "A: %s (max %.4g)", kStats[s.stat_index], a_peak);
+        ImGui::PlotHistogram("##strip_a", a_values.data(), int(a_values.size()), 0, label, 0.0f,
+                             scale, ImVec2(ImGui::GetContentRegionAvail().x, 30));
+    }
     if (s.job && !s.job->done()) {
         const ProgressSnapshot p = s.job->snapshot();
         // Which frame the job really renders: on the way to the one asked for, a stateful
@@ -543,6 +555,7 @@ void Workbench::draw(int fb_w, int fb_h) {
         ImGui::EndMainMenuBar();
     }
     poll_reference(s);
+    poll_run_a(s);
 
     if (s.playing && ++s.play_ticks >= 2) {  // advance when the next frame is ready
         s.play_ticks = 0;
@@ -649,6 +662,15 @@ std::vector<int> Workbench::recorded_frames() const {
     std::vector<int> frames;
     for (const auto& [f, stats] : s_->recorded) frames.push_back(f);
     return frames;
+}
+void Workbench::keep_run_as_a() {
+    pin_run_a(*s_);
+}
+void Workbench::forget_run_a() {
+    unpin_run_a(*s_);
+}
+bool Workbench::comparing_runs() const {
+    return ::freqlab::ui::comparing_runs(*s_);
 }
 int Workbench::frame_count() const {
     return s_->scene.frame_count;

@@ -80,6 +80,11 @@ class Workbench {
     bool busy() const;
     std::vector<int> recorded_frames() const;  // frames rendered and kept, in order
     int frame_count() const;                   // the scene's
+    // A/B: the run shown becomes A; after a settings change each frame shown (B) gains the
+    // layers run_a, error, relative_error and metrics() against A's recording of it.
+    void keep_run_as_a();
+    void forget_run_a();
+    bool comparing_runs() const;  // A kept and another run shown
     // The run store folder of the run shown (render/frame_store.h; empty for bakes).
     std::string run_directory() const;
     struct DecodedMemory {

@@ -35,6 +35,15 @@ struct BakeSessionDeleter {
 };
 using BakeSessionPtr = std::unique_ptr<BakeSession, BakeSessionDeleter>;
 
+// A/B (workbench_ab.cpp): run A, kept to compare the run shown (B) with.
+struct RunA {
+    nlohmann::json key;
+    std::filesystem::path dir;
+    std::string method;
+    std::map<int, nlohmann::json> stats;  // A's recorded frames
+};
+constexpr const char* kRunALayer = "run_a";
+
 struct Workbench::State {
     WorkbenchOptions options;
     Scene scene;
@@ -95,6 +104,7 @@ struct Workbench::State {
     float split_position = 0.5f;
     LayerView reference_view;
     std::string reference_note;       // how the reference was chosen (bakes: its measured noise)
+    std::optional<RunA> run_a;        // A/B: frames are compared with A's instead
     std::vector<FigureInset> insets;  // for Export > Figure
     std::vector<std::string> trace_lines;      // the inspector's pixel trace
     std::optional<RadiancePoint> trace_point;  // method points: the pixel's radiance point
@@ -160,6 +170,15 @@ std::shared_ptr<FrameResult> recorded_result(Workbench::State& s, int frame);
 void keep_result(Workbench::State& s, FrameResult result);
 
 void restart_renderer(Workbench::State& s);
+// A/B of two recorded runs (workbench_ab.cpp). comparing_runs: A is kept and B (shown) is
+// another run; then the "reference" of a frame is A's recording of it.
+bool comparing_runs(const Workbench::State& s);
+void pin_run_a(Workbench::State& s);
+void unpin_run_a(Workbench::State& s);
+void poll_run_a(Workbench::State& s);  // loads A's frame for the frame shown
+void draw_run_ab_panel(Workbench::State& s);
+// A's per-frame statistic `stat` (0 where A has no frame; empty when not comparing runs).
+std::vector<float> run_a_strip(const Workbench::State& s, const char* stat);
 // Compare, exports and sessions (workbench_tools.cpp).
 void poll_reference(Workbench::State& s);
 void start_reference(Workbench::State& s);

@@ -42,11 +42,15 @@ void attach_reference(Workbench::State& s, int frame) {
     if (!ref_color || ref->second.width() != L.width() || ref->second.height() != L.height())
         return;
     const Layer& test = L.get("color");
-    Layer& r = L.add("reference", LayerKind::Color, 3, "reference render of this frame");
+    const bool ab = comparing_runs(s);
+    const std::string name = ab ? kRunALayer : "reference";
+    Layer& r = L.add(name, LayerKind::Color, 3,
+                     ab ? "run A's colour of this frame (A/B)" : "reference render of this frame");
     r.data = ref_color->data;
-    Layer& err = L.add("error", LayerKind::Signed, 1, "luminance(colour) - luminance(reference)");
+    Layer& err =
+        L.add("error", LayerKind::Signed, 1, "luminance(colour) - luminance(" + name + ")");
     Layer& rel = L.add("relative_error", LayerKind::Continuous, 1,
-                       "mean over RGB of |colour - reference| / (reference + 0.01)");
+                       "mean over RGB of |colour - " + name + "| / (" + name + " + 0.01)");
     for (size_t p = 0; p < L.pixel_count(); ++p) {
         const vec3 t(test.data[3 * p], test.data[3 * p + 1], test.data[3 * p + 2]);
         const vec3 q(r.data[3 * p], r.data[3 * p + 1], r.data[3 * p + 2]);
@@ -174,6 +178,18 @@ const ImageMetrics* Workbench::metrics() const {
 }
 
 void draw_compare_panel(Workbench::State& s) {
+    if (!s.bake) draw_run_ab_panel(s);
+    if (comparing_runs(s)) {  // the metrics are against run A
+        const int frame = s.shown ? s.shown->frame : -1;
+        auto m = s.metrics.find(frame);
+        if (m != s.metrics.end()) {
+            ImGui::Text("B against A: RMSE %.5f  relMSE %.5f  SSIM %.4f", m->second.rmse,
+                        m->second.relmse, m->second.ssim);
+            ImGui::Checkbox("split view (A right)", &s.split);
+            if (s.split) ImGui::SliderFloat("split", &s.split_position, 0.0f, 1.0f);
+        }
+        return;
+    }
     if (!ImGui::CollapsingHeader("Compare with reference",
                                  s.split ? ImGuiTreeNodeFlags_DefaultOpen : 0))
         return;

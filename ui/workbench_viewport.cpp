@@ -206,8 +206,12 @@ void draw_viewport(Workbench::State& s) {
             ImVec2(origin.x + size.x, origin.y + size.y), ImVec2(split_u, uv0.y), uv1);
         ImGui::GetWindowDrawList()->AddLine(a, ImVec2(a.x, origin.y + size.y),
                                             IM_COL32(255, 255, 255, 255), 1.5f);
+        const bool ab = comparing_runs(s);
         ImGui::GetWindowDrawList()->AddText(ImVec2(a.x + 6, origin.y + 4),
-                                            IM_COL32(255, 255, 255, 255), "reference");
+                                            IM_COL32(255, 255, 255, 255), ab ? "A" : "reference");
+        if (ab)
+            ImGui::GetWindowDrawList()->AddText(ImVec2(origin.x + 6, origin.y + 4),
+                                                IM_COL32(255, 255, 255, 255), "B");
     }
     const ImGuiIO& io = ImGui::GetIO();
     auto mouse_uv = [&] {

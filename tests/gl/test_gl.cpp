@@ -774,6 +774,35 @@ TEST(GlWorkbench, JumpsResumeFromTheRunsCheckpointsWithTheSameBytes) {
     fs::remove_all(store);
 }
 
+// A/B of two recorded runs (issue "The timeline as a recorded run"): the run kept as A, a
+// setting changed, the frame B shows gains A's recorded colour bit for bit (layer run_a), its
+// error layers and metrics against it; forgetting A drops the comparison.
+TEST(GlWorkbench, ABComparesTheShownRunWithRunAsRecording) {
+    GlSession gl;
+    WorkbenchOptions o = small_scene("color");
+    o.method = "mis";
+    o.settings.push_back("mis.spp=2");
+    Workbench wb(o);
+    run_until_shown(gl, wb);
+    const std::vector<float> a = wb.layers()->get("color").data;
+    wb.keep_run_as_a();
+    EXPECT_FALSE(wb.comparing_runs()) << "A is the run shown until a setting changes";
+    wb.apply_setting("mis.spp=16");
+    run_until_shown(gl, wb);
+    for (int i = 0; i < 5 && !wb.metrics(); ++i) render_ui_frame(*gl.host, wb);
+    EXPECT_TRUE(wb.comparing_runs());
+    ASSERT_NE(wb.metrics(), nullptr);
+    const Layer* run_a = wb.layers()->find("run_a");
+    ASSERT_NE(run_a, nullptr);
+    EXPECT_EQ(run_a->data, a);
+    EXPECT_NE(wb.layers()->get("color").data, a) << "B renders 16 samples, A 2";
+    EXPECT_GT(wb.metrics()->rmse, 0.0);
+    EXPECT_EQ(wb.layers()->find("reference"), nullptr);
+    wb.forget_run_a();
+    EXPECT_FALSE(wb.comparing_runs());
+    EXPECT_EQ(wb.metrics(), nullptr);
+}
+
 // Cancel cancels (issue "The timeline as a recorded run", acceptance 5): the job stops, and no
 // job for that frame starts again by itself (it restarted on the next UI frame); the window may
 // sleep. Another frame, or "render", renders again.
