@@ -7,6 +7,7 @@
 #include <imgui_impl_opengl3.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -43,6 +44,7 @@ void restart_renderer(Workbench::State& s) {
         s.results.clear();
         s.recorded.clear();
         s.store_failure.clear();
+        s.preview.reset();
     }
     s.shown = nullptr;
     s.shown_frame = -1;
@@ -94,6 +96,7 @@ std::shared_ptr<FrameResult> recorded_result(Workbench::State& s, int frame) {
 }
 
 void keep_result(Workbench::State& s, FrameResult result) {
+    if (s.preview && s.preview->frame == result.frame) s.preview.reset();
     s.recorded[result.frame] = result.stats;
     s.results.keep(std::make_shared<FrameResult>(std::move(result)));
 }
@@ -166,6 +169,21 @@ void start_job_if_needed(Workbench::State& s) {
         if (!restore_file.empty())
             sp->renderer->restore_state(read_frame_checkpoint(restore_file, sp->run_key).state,
                                         restore_file.string());
+        const auto start = std::chrono::steady_clock::now();
+        sp->renderer->set_preview_sink([sp, frame, start](LayerSet&& layers) {
+            auto p = std::make_shared<FrameResult>();
+            p->frame = frame;
+            p->preview = true;
+            p->layers = std::move(layers);
+            p->stats = {{"frame", frame},
+                        {"preview", true},
+                        {"rays", 0},
+                        {"time_ms", std::chrono::duration<double, std::milli>(
+                                        std::chrono::steady_clock::now() - start)
+                                        .count()}};
+            std::lock_guard<std::mutex> lock(sp->results_mutex);
+            sp->preview = std::move(p);
+        });
         FrameResult r = sp->renderer->render(frame, progress);
         std::string failure;
         try {  // a full disk keeps the frame in memory only, and says so
@@ -572,6 +590,8 @@ void Workbench::draw(int fb_w, int fb_h) {
         std::shared_ptr<const FrameResult> r;
         if (s.show_env_bandwidth)
             r = s.env_bandwidth;
+        else if (want != s.frame && s.preview && s.preview->frame == s.frame)
+            r = s.preview;  // the frame's first image while it renders
         else if (s.results.contains(want) || !s.shown || s.shown->environment_view ||
                  s.shown->frame != want)
             r = want >= 0 ? recorded_result(s, want) : nullptr;
@@ -700,11 +720,16 @@ void Workbench::apply_setting(const std::string& assignment) {
         *s_, group.apply_assignment(assignment, "workbench") | kInvalidatesDisplay);
 }
 
+bool Workbench::first_image_shown() const {
+    return s_->shown && s_->shown->preview && s_->shown->frame == s_->frame && !s_->view_dirty;
+}
+
 bool Workbench::frame_shown() const {
     // A bake is shown once its last pass is (earlier passes are progressive previews).
     if (bake_busy(*s_)) return !s_->error.empty();
     const bool env_view = s_->show_env_bandwidth && s_->shown && s_->shown->environment_view;
-    return (s_->shown && (s_->shown->frame == s_->frame || env_view) && !s_->view_dirty) ||
+    return (s_->shown && !s_->shown->preview && (s_->shown->frame == s_->frame || env_view) &&
+            !s_->view_dirty) ||
            !s_->error.empty();
 }
 

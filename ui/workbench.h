@@ -76,6 +76,7 @@ class Workbench {
     bool set_layer(const std::string& name);
     void apply_setting(const std::string& assignment);  // "prefix.key=value"; re-renders as needed
     bool frame_shown() const;                           // the current frame's result is on screen
+    bool first_image_shown() const;  // the current frame's first image (it still renders)
     // Something on screen changes without input: a job runs, playback, a frame not shown yet.
     bool busy() const;
     std::vector<int> recorded_frames() const;  // frames rendered and kept, in order

@@ -92,6 +92,12 @@ void update_trace(Workbench::State& s) {
         }
         return;
     }
+    if (s.shown->preview) {  // no estimate of its own to trace yet
+        s.trace_lines = {"(the frame's first image: its trace comes with the rendered frame)"};
+        s.trace_point.reset();
+        s.trace_pixel = {-1, -1};
+        return;
+    }
     if (s.renderer && idle && (stale || s.trace_partial)) {
         RadiancePoint point;
         point.footprint_radius = -1.0;  // stays negative unless a radiance point was traced

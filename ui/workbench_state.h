@@ -69,6 +69,8 @@ struct Workbench::State {
     DecodedFrames results{0};
     std::map<int, nlohmann::json> recorded;
     std::string store_failure;  // why the last frame could not be kept on disk (shown)
+    // The first image of the frame the job renders (render/sparse_pass.h), until it is kept.
+    std::shared_ptr<FrameResult> preview;
 
     int frame = 0;
     bool playing = false;

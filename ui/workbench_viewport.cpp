@@ -142,7 +142,9 @@ void draw_viewport(Workbench::State& s) {
         ImGui::EndCombo();
     }
     const Layer* layer = L.find(s.layer_name);
-    if (!layer) {
+    if (!layer && s.shown->preview) {
+        layer = &L.get("color");  // a first image has only its colour: the choice stays
+    } else if (!layer) {
         s.layer_name = "color";
         layer = &L.get("color");
         s.view_dirty = true;

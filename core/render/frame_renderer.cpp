@@ -153,8 +153,17 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
         stages["env_bandwidth"] = ms_since(t0);
     }
     if (method.render) {
-        MethodContext context{ray_scene_,          gb.gbuffer,          frame,   config_, bw,
-                              method_state_.get(), keep_cache_details_, record_, result,  progress};
+        MethodContext context{ray_scene_,
+                              gb.gbuffer,
+                              frame,
+                              config_,
+                              bw,
+                              method_state_.get(),
+                              keep_cache_details_,
+                              record_,
+                              result,
+                              progress,
+                              preview_ ? &preview_ : nullptr};
         MethodOutput out = method.render(context);
         rays += out.rays;
         guarded = out.nonfinite;

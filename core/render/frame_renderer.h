@@ -61,6 +61,8 @@ struct FrameResult {
     std::shared_ptr<const RadianceCache> cache_snapshot;  // entries before this frame's changes
     // Method cache: the reused samples' positions (SparsePassOutput::moved_samples).
     std::shared_ptr<const std::vector<std::pair<int, vec3>>> sample_positions;
+    // A first image of the frame, shown while the frame renders (never recorded).
+    bool preview = false;
 };
 
 class FrameRenderer {
@@ -77,6 +79,9 @@ class FrameRenderer {
     // Method cache: also return a copy of the cache as it was before each frame (for the
     // inspector; costs a copy of the cache per frame).
     void keep_cache_details(bool on) { keep_cache_details_ = on; }
+    // Methods sparse and cache hand a first image of each frame to `sink` while it renders
+    // (render/sparse_pass.h); called on the rendering thread. Empty: none.
+    void set_preview_sink(std::function<void(LayerSet&&)> sink) { preview_ = std::move(sink); }
     // Methods that reconstruct record pixel (record->x, record->y)'s contributions into
     // *record during the next renders (null: none).
     void record_reconstruction(ReconstructionRecord* record) { record_ = record; }
@@ -96,6 +101,7 @@ class FrameRenderer {
     std::unique_ptr<EnvBandwidthHierarchy> bandwidth_;  // method A: built on first use
     std::unique_ptr<MethodState> method_state_;         // the method's across frames
     bool keep_cache_details_ = false;
+    std::function<void(LayerSet&&)> preview_;
     ReconstructionRecord* record_ = nullptr;
     const EnvBandwidthHierarchy* bandwidth();
 };

@@ -76,7 +76,7 @@ MethodOutput render_sparse_method(MethodContext& c) {
     return sparse_output(render_sparse(c.rays, c.gbuffer, c.frame, c.config.frame, c.config.shading,
                                        c.config.points, c.config.sparse, c.bandwidth,
                                        c.result.layers, c.progress, nullptr,
-                                       c.reconstruction_record));
+                                       c.reconstruction_record, c.preview));
 }
 
 struct CacheMethodState : MethodState {
@@ -104,9 +104,10 @@ MethodOutput render_cache_method(MethodContext& c) {
     if (c.keep_details)
         c.result.cache_snapshot = std::make_shared<const RadianceCache>(state.cache);
     const CacheHook hook{state, c.config.cache};
-    SparsePassOutput out = render_sparse(
-        c.rays, c.gbuffer, c.frame, c.config.frame, c.config.shading, c.config.points,
-        c.config.sparse, c.bandwidth, c.result.layers, c.progress, &hook, c.reconstruction_record);
+    SparsePassOutput out =
+        render_sparse(c.rays, c.gbuffer, c.frame, c.config.frame, c.config.shading, c.config.points,
+                      c.config.sparse, c.bandwidth, c.result.layers, c.progress, &hook,
+                      c.reconstruction_record, c.preview);
     state.last_frame = c.frame;
     c.result.sample_positions =
         std::make_shared<const std::vector<std::pair<int, vec3>>>(std::move(out.moved_samples));

@@ -57,6 +57,8 @@ struct MethodContext {
     ReconstructionRecord* reconstruction_record;  // FrameRenderer::record_reconstruction
     FrameResult& result;
     Progress& progress;
+    // FrameRenderer::set_preview_sink: methods that can show a first image hand it here.
+    const std::function<void(LayerSet&&)>* preview = nullptr;
 };
 struct MethodOutput {
     long rays = 0;       // beyond the G-buffer's

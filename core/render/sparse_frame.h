@@ -27,14 +27,15 @@ struct SparseFrame {
                 ReconstructionRecord* record);
 
     // The stages, in order.
-    void cache_reproject();    // 0. move, project and test every entry (all but occlusion)
-    void initial_points();     // 1. uniform points, or the kept entries standing in for them
-    void upsample();           // 2. upsampled visibility statistics and features
-    void cache_resolve();      // 2b. occlusion and key-light tests, one entry per pixel
-    void compute_density();    // 3. density from the per-pixel screen-space bandwidth
-    void adaptive_points();    // 4. rejection sampling and the adaptive points
-    void reconstruct_image();  // 5. cross-bilateral reconstruction, fallbacks shaded
-    void cache_insert();       // 6. batch discard, then every new point becomes an entry
+    void cache_reproject();          // 0. move, project and test every entry (all but occlusion)
+    void initial_points();           // 1. uniform points, or the kept entries standing in for them
+    LayerSet preview_image() const;  // 1b. the colour from the initial grid alone
+    void upsample();                 // 2. upsampled visibility statistics and features
+    void cache_resolve();            // 2b. occlusion and key-light tests, one entry per pixel
+    void compute_density();          // 3. density from the per-pixel screen-space bandwidth
+    void adaptive_points();          // 4. rejection sampling and the adaptive points
+    void reconstruct_image();        // 5. cross-bilateral reconstruction, fallbacks shaded
+    void cache_insert();             // 6. batch discard, then every new point becomes an entry
     void write_layers();
     SparsePassOutput finish();
 

@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -188,6 +189,60 @@ void SparseFrame::initial_points() {
     shade_all(initial_shaded, 0);
     for (int i : initial_shaded) kind[size_t(i)] = SampleKind::Initial;
     result.stats["stages"]["initial"] = ms_since(t0);
+}
+
+LayerSet SparseFrame::preview_image() const {
+    LayerSet out(w, h);
+    Layer& color = out.add("color", LayerKind::Color, 3,
+                           "first image: the initial grid's points alone (refined next)");
+    const int k = std::max(sparse.initial_stride, 1);
+    // The value at initial pixel j: its fresh point's, or the cache entry standing in for it.
+    auto grid_value = [&](size_t j, vec3* v) {
+        if (fresh[j]) {
+            *v = value[j];
+            return true;
+        }
+        if (standin.empty() || standin[j] < 0) return false;
+        const CacheRecord& r = result.cache_records[size_t(standin[j])];
+        *v = cache->state.cache.object(r.object).get(r.slot).shading;
+        return true;
+    };
+    const int gw = (w - k / 2 + k - 1) / k, gh = (h - k / 2 + k - 1) / k;
+    tbb::parallel_for(0, h, [&](int y) {
+        for (int x = 0; x < w; ++x) {
+            const size_t i = size_t(y) * w + x;
+            vec3 c(0.0f);
+            if (!features[i].valid) {
+                c = rs.background(gb.view_dirs[i]);
+            } else {
+                const float fx = float(x - k / 2) / float(k), fy = float(y - k / 2) / float(k);
+                const int gx = std::clamp(int(std::floor(fx)), 0, std::max(gw - 2, 0));
+                const int gy = std::clamp(int(std::floor(fy)), 0, std::max(gh - 2, 0));
+                vec3 sum(0.0f);
+                float weight = 0.0f;
+                for (int dy = 0; dy <= 1; ++dy)
+                    for (int dx = 0; dx <= 1; ++dx) {
+                        const int px = k / 2 + k * (gx + dx), py = k / 2 + k * (gy + dy);
+                        if (px >= w || py >= h) continue;
+                        const size_t j = size_t(py) * w + px;
+                        vec3 v;
+                        if (!features[j].valid || features[j].object != features[i].object ||
+                            mirror[j] != mirror[i] || !grid_value(j, &v))
+                            continue;
+                        const float wx = 1.0f - std::min(std::fabs(fx - float(gx + dx)), 1.0f);
+                        const float wy = 1.0f - std::min(std::fabs(fy - float(gy + dy)), 1.0f);
+                        const float wgt = std::max(wx * wy, 1e-4f);
+                        sum += wgt * v;
+                        weight += wgt;
+                    }
+                if (weight > 0.0f) c = sum / weight;
+                if (!mirror[i]) c *= shading_points[i].albedo;
+            }
+            if (!std::isfinite(c.x + c.y + c.z)) c = vec3(0.0f);
+            for (int ch = 0; ch < 3; ++ch) color.data[3 * i + size_t(ch)] = c[ch];
+        }
+    });
+    return out;
 }
 
 void SparseFrame::upsample() {
@@ -415,11 +470,12 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
                                const PointsSettings& points, const SparseSettings& sparse,
                                const EnvBandwidthHierarchy* bandwidth, LayerSet& layers,
                                Progress& progress, const CacheHook* cache,
-                               ReconstructionRecord* record) {
+                               ReconstructionRecord* record, const PreviewSink* preview) {
     SparseFrame f(rs, gb, frame, fs, shading, points, sparse, bandwidth, layers, progress, cache,
                   record);
     if (cache) f.cache_reproject();
     f.initial_points();
+    if (preview && *preview) (*preview)(f.preview_image());
     f.upsample();
     if (cache) f.cache_resolve();
     f.compute_density();

@@ -40,12 +40,20 @@ struct CacheHook {
     const CacheSettings& settings;
 };
 
+// A first image of the frame (issue "The timeline as a recorded run": a progressive first
+// image): once the initial grid is shaded (or stood in for by cache entries), its colour from
+// those points alone, each pixel the bilinear blend of the grid points around it on its own
+// object times its albedo; the background as rendered. A `color` layer, handed over while the
+// adaptive points render.
+using PreviewSink = std::function<void(LayerSet&&)>;
+
 SparsePassOutput render_sparse(const RayScene& scene, const GBuffer& gbuffer, int frame,
                                const FrameSettings& frame_settings, const ShadingSettings& shading,
                                const PointsSettings& points, const SparseSettings& sparse,
                                const EnvBandwidthHierarchy* bandwidth, LayerSet& layers,
                                Progress& progress, const CacheHook* cache = nullptr,
-                               ReconstructionRecord* record = nullptr);
+                               ReconstructionRecord* record = nullptr,
+                               const PreviewSink* preview = nullptr);
 
 // The `sampled` layer's categories.
 // (The layer adds 4 = reused for the cache's entries.)
