@@ -89,3 +89,10 @@ rm -rf "$fig_dir"
 # window_first_start.png / window_first_start_decisions.png: `freqlab` with no argument in a
 # real window under Xvfb (session 23, by hand): method A's cache on the built-in scene, playing,
 # with the hint line; then the D key (cache decisions over the colour).
+# window_ab_split.png / window_first_image.png: A/B of two recorded runs in a real window under
+# Xvfb (session 24, by hand): `freqlab gui scenes/rotor.json --method cache --frame 4 --set
+# frame.width=640 --set frame.height=360` (frames 0-4 recorded; opened again they come from the
+# run store at once), Settings scrolled down, "A/B runs" > "Keep this run as A", ctrl-click
+# q_eps_x and type 0.002: window_first_image.png is taken while B renders frame 0 on the way to 4
+# (its first image from the initial grid, B left of the split, A's frame 0 right);
+# window_ab_split.png when frame 4 is rendered (metrics B against A, A's time_ms under B's).

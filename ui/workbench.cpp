@@ -590,8 +590,9 @@ void Workbench::draw(int fb_w, int fb_h) {
         std::shared_ptr<const FrameResult> r;
         if (s.show_env_bandwidth)
             r = s.env_bandwidth;
-        else if (want != s.frame && s.preview && s.preview->frame == s.frame)
-            r = s.preview;  // the frame's first image while it renders
+        else if (want != s.frame && s.preview && s.preview->frame <= s.frame &&
+                 s.preview->frame > want)
+            r = s.preview;  // a first image, of the frame or one on the way, while it renders
         else if (s.results.contains(want) || !s.shown || s.shown->environment_view ||
                  s.shown->frame != want)
             r = want >= 0 ? recorded_result(s, want) : nullptr;

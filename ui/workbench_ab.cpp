@@ -7,6 +7,7 @@
 // A frame A did not record is said, not rendered: A stays what was recorded.
 #include <imgui.h>
 
+#include <cstdio>
 #include <mutex>
 
 #include "base/error.h"
@@ -16,6 +17,14 @@
 namespace freqlab::ui {
 
 namespace {
+
+// Numbers as %.6g: settings are floats, and their doubles print as 9.999999747378752e-05.
+std::string short_text(const nlohmann::json& v) {
+    if (!v.is_number_float()) return v.dump();
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6g", v.get<double>());
+    return text;
+}
 
 // "key: A -> B" for every setting that differs between two runs' keys (their settings JSON).
 std::string settings_difference(const nlohmann::json& a, const nlohmann::json& b,
@@ -31,7 +40,7 @@ std::string settings_difference(const nlohmann::json& a, const nlohmann::json& b
         }
         return out;
     }
-    return a == b ? "" : prefix + ": " + a.dump() + " -> " + b.dump();
+    return a == b ? "" : prefix + ": " + short_text(a) + " -> " + short_text(b);
 }
 
 }  // namespace
@@ -106,7 +115,7 @@ void draw_run_ab_panel(Workbench::State& s) {
     } else {
         ImGui::TextWrapped("A -> B: %s", diff.empty() ? "(method)" : diff.c_str());
         const int frame = s.shown ? s.shown->frame : -1;
-        if (!s.run_a->stats.count(frame))
+        if (frame >= 0 && !s.run_a->stats.count(frame))
             ImGui::TextWrapped("A has no frame %d (A recorded %zu frames)", frame,
                                s.run_a->stats.size());
     }
