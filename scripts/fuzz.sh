@@ -11,6 +11,6 @@ runs=${FREQLAB_FUZZ_RUNS:-10000}
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -DFREQLAB_MPI=OFF -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_CXX_FLAGS_RELEASE="-O1 -g1" -DFREQLAB_SANITIZE=address,undefined -DFREQLAB_FUZZ=ON \
   -DFREQLAB_BUILD_UI=OFF -DFREQLAB_BUILD_TESTS=OFF -DFREQLAB_FUZZ_RUNS="$runs" >/dev/null
-targets=(scene_json set_assignment session impulse_table env_exr env_hdr vdb)
+targets=(scene_json set_assignment session impulse_table env_exr env_hdr vdb run_store)
 cmake --build build-fuzz -j "$jobs" --target "${targets[@]/#/fuzz_}"
 ctest --test-dir build-fuzz -L fuzz --output-on-failure -j "$jobs"

@@ -47,8 +47,17 @@ LayerSet decode_layers(std::string_view bytes, const std::string& source) {
         const int channels = r.get<int32_t>();
         if (channels < 1 || channels > 4)
             throw Error(source, "layers." + name, "expected 1 to 4 channels");
+        // The values must be in what is left before a layer of the declared size is allocated.
+        if (uint64_t(width) * uint64_t(height) * uint64_t(channels) > r.remaining() / sizeof(float))
+            throw Error(source, "layers." + name,
+                        std::to_string(width) + " x " + std::to_string(height) + " x " +
+                            std::to_string(channels) + " values past the end");
         Layer& l = set.add(name, LayerKind(kind), channels, r.get_string());
-        l.legend.resize(r.get<uint32_t>());
+        const uint32_t entries = r.get<uint32_t>();
+        if (entries > r.remaining() / sizeof(uint64_t))  // each at least its length
+            throw Error(source, "layers." + name,
+                        "a legend of " + std::to_string(entries) + " entries past the end");
+        l.legend.resize(entries);
         for (std::string& s : l.legend) s = r.get_string();
         const uint32_t colours = r.get<uint32_t>();
         if (size_t(colours) * sizeof(vec3) > r.remaining())

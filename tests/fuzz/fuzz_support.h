@@ -10,6 +10,8 @@
 #include <fstream>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include <unistd.h>
 
 inline std::string write_fuzz_input(const uint8_t* data, size_t size, const char* extension) {
@@ -27,6 +29,11 @@ inline std::string write_fuzz_input(const uint8_t* data, size_t size, const char
             __builtin_trap();                                                                    \
         }                                                                                        \
     } while (0)
+
+// The run key the run-store target reads its frames with (its seeds are written with it).
+inline nlohmann::json fuzz_run_key() {
+    return {{"freqlab", "fuzz"}, {"scene_hash", "0"}, {"method", "cache"}, {"seed", 0}};
+}
 
 inline void fuzz_report(const std::exception& e) {
     static const bool verbose = std::getenv("FREQLAB_FUZZ_VERBOSE") != nullptr;

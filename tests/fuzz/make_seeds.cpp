@@ -12,7 +12,11 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "base/byte_stream.h"
+#include "cache/radiance_cache.h"
+#include "fuzz_support.h"
 #include "render/frame_renderer.h"
+#include "render/frame_store.h"
 #include "session/session_file.h"
 #include "volume/vdb_reader.h"
 
@@ -82,6 +86,40 @@ void write_sessions(const fs::path& dir) {
 
 }  // namespace
 
+// A recorded frame (prefix byte 0) and an encoded cache (prefix 1), tiny but with every part.
+void write_run_store_seeds(const fs::path& dir) {
+    fs::create_directories(dir);
+    const fs::path tmp = fs::temp_directory_path() / "freqlab-seed-run";
+    freqlab::FrameResult r;
+    r.frame = 3;
+    r.layers = freqlab::LayerSet(4, 3);
+    r.layers.add("color", freqlab::LayerKind::Color, 3).data.assign(36, 0.5f);
+    freqlab::Layer& d = r.layers.add("decision", freqlab::LayerKind::Categorical, 1);
+    d.legend = {"reused", "new"};
+    d.palette = {freqlab::vec3(1, 0, 0), freqlab::vec3(0, 1, 0)};
+    r.stats = {{"frame", 3}, {"time_ms", 1.5}};
+    freqlab::CacheRecord rec;
+    rec.pixel = 5;
+    r.cache_records = std::make_shared<const std::vector<freqlab::CacheRecord>>(1, rec);
+    r.sample_positions = std::make_shared<const std::vector<std::pair<int, freqlab::vec3>>>(
+        1, std::make_pair(5, freqlab::vec3(1, 2, 3)));
+    freqlab::write_recorded_frame(tmp, fuzz_run_key(), r);
+    std::ifstream in(freqlab::recorded_frame_path(tmp, 3), std::ios::binary);
+    const std::string frame((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream(dir / "frame.bin", std::ios::binary) << '\0' << frame;
+    freqlab::RadianceCache cache;
+    cache.reset(2);
+    for (int k = 0; k < 3; ++k) {
+        freqlab::CacheEntry e;
+        e.position = freqlab::vec3(float(k), 0.0f, 1.0f);
+        cache.object(k % 2).insert(e);
+    }
+    freqlab::ByteWriter w;
+    cache.encode(w);
+    std::ofstream(dir / "cache.bin", std::ios::binary) << '\1' << w.bytes();
+    fs::remove_all(tmp);
+}
+
 int main(int argc, char** argv) {
     if (argc != 2) {
         std::fprintf(stderr, "usage: fuzz_make_seeds tests/fuzz\n");
@@ -104,5 +142,6 @@ int main(int argc, char** argv) {
     write_vdb(corpus / "vdb/density.vdb", "density", 4, 0.5f);
     write_vdb(corpus / "vdb/smoke.vdb", "smoke", 3, 1.0f);
     write_sessions(corpus / "session");
+    write_run_store_seeds(corpus / "run_store");
     return 0;
 }
