@@ -408,6 +408,9 @@ void draw_timeline(Workbench::State& s) {
     } else if (s.shown && s.shown->environment_view) {
         ImGui::Text("environment bandwidth: %d levels   %s", s.shown->stats["levels"].get<int>(),
                     s.status.c_str());
+    } else if (s.shown && s.shown->preview) {
+        ImGui::Text("frame %d: first image (the initial grid alone), refining   %s", s.shown->frame,
+                    s.status.c_str());
     } else if (s.shown && s.options.show_timings) {
         ImGui::Text("frame %d: %.1f ms, %ld rays   %s", s.shown->frame,
                     s.shown->stats["time_ms"].get<double>(), s.shown->stats["rays"].get<long>(),
@@ -416,6 +419,9 @@ void draw_timeline(Workbench::State& s) {
         ImGui::Text("frame %d: %ld rays   %s", s.shown->frame, s.shown->stats["rays"].get<long>(),
                     s.status.c_str());
     }
+    std::lock_guard<std::mutex> lock(s.results_mutex);
+    if (!s.store_failure.empty())  // the frames still show; they are not kept on disk
+        ImGui::TextColored(ImVec4(1.0f, 0.8f, 0.3f, 1.0f), "%s", s.store_failure.c_str());
 }
 
 }  // namespace
