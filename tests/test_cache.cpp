@@ -350,6 +350,31 @@ TEST(CachePipeline, StaticSceneSecondFrameShadesNothingAndMatches) {
     EXPECT_EQ(f1.stats["discards"]["temporal"].get<long>(), 0);
 }
 
+// cache.cold_start (issue "The timeline as a recorded run": a cold start here, for comparison):
+// every frame starts from an empty cache, so frame 1 of the still rotor reuses nothing and is
+// bit for bit the frame a fresh renderer gives for frame 1 alone; the frames need no previous
+// ones; each frame's stats say how it started.
+TEST(CachePipeline, ColdStartRendersEveryFrameFromAnEmptyCache) {
+    const Scene scene = still_rotor();
+    RenderConfig config = small_config(RenderMethod::Cache, 160, 90, 64);
+    EmbreeDevice device;
+    {
+        const auto [f0, f1] = two_still_cache_frames();
+        EXPECT_EQ(f0.stats["cache_start"], "cold (empty cache)");
+        EXPECT_EQ(f1.stats["cache_start"], "warm");
+    }
+    config.cache.cold_start = true;
+    EXPECT_FALSE(config.needs_previous_frames());
+    FrameRenderer renderer(scene, config, device), alone(scene, config, device);
+    Progress progress;
+    (void)renderer.render(0, progress);
+    const FrameResult f1 = renderer.render(1, progress);
+    const FrameResult only = alone.render(1, progress);
+    EXPECT_EQ(f1.stats["pixels_reused"].get<long>(), 0);
+    EXPECT_EQ(f1.stats["cache_start"], "cold (cache.cold_start)");
+    EXPECT_EQ(f1.layers.get("color").data, only.layers.get("color").data);
+}
+
 // Reused pixels show their entry's radiance-point values (they read 0: 76k of 102k pixels of a
 // cache frame had no B_x, sigma_V, ...): nothing moves, so frame 1's entry at a pixel is frame
 // 0's point there, and its kept values are that point's (B_L, sigma_rho, N_omega, B_S are not).

@@ -43,7 +43,11 @@ struct RenderConfig {
     // The samples of the chosen method's estimates (mis / reference / radiance points).
     SampleSequence sequence() const;
     // Methods with state across frames (method A's cache) must render frames in order.
-    bool needs_previous_frames() const { return render_method_info(method).stateful; }
+    // (Not method cache with cache.cold_start: each of its frames starts from an empty cache.)
+    bool needs_previous_frames() const {
+        return render_method_info(method).stateful &&
+               !(method == RenderMethod::Cache && cache.cold_start);
+    }
     // All settings of this render under their "prefix.key" names (for --set, JSON, stats).
     SettingsGroup settings_group();
 };

@@ -95,12 +95,13 @@ MethodOutput render_cache_method(MethodContext& c) {
     CacheState& state = static_cast<CacheMethodState*>(c.state)->cache;
     const size_t objects = c.rays.scene().objects.size();
     bool reset = false;
-    if (c.frame != state.last_frame + 1) {
+    if (c.config.cache.cold_start || c.frame != state.last_frame + 1) {
         // Out of order (a scrub, a re-render): the cache starts afresh at this frame.
         state.cache.reset(objects);
         reset = state.last_frame >= 0;
     }
     if (state.cache.object_count() != objects) state.cache.reset(objects);
+    const bool started_empty = state.cache.live_count() == 0;
     if (c.keep_details)
         c.result.cache_snapshot = std::make_shared<const RadianceCache>(state.cache);
     const CacheHook hook{state, c.config.cache};
@@ -115,6 +116,11 @@ MethodOutput render_cache_method(MethodContext& c) {
         std::make_shared<const std::vector<CacheRecord>>(std::move(out.cache_records));
     MethodOutput m = sparse_output(std::move(out));
     m.stats["cache_reset"] = reset;
+    // How the frame started, for the inspector: warm (the frame before's cache) or cold, and why.
+    m.stats["cache_start"] = c.config.cache.cold_start ? "cold (cache.cold_start)"
+                             : reset                   ? "cold (not after the frame before)"
+                             : started_empty           ? "cold (empty cache)"
+                                                       : "warm";
     return m;
 }
 

@@ -54,6 +54,11 @@ const SettingsSchema& CacheSettings::schema() {
                    "($FREQLAB_CACHE_DIR/runs); a jump to a frame not rendered yet resumes from "
                    "the newest one at or before it, the frames byte-identical to rendering "
                    "from frame 0 (0: none; `render --checkpoint-every K` on the command line).")
+            .field(&CacheSettings::cold_start, "cold_start", 0, 1, "", kInvalidatesCache,
+                   "Comparison: every frame starts from an empty cache (a cold start here), so "
+                   "frames are independent and render alone; what the cache's reuse saves is "
+                   "this run against the warm one (A/B runs). Each frame's stats say how it "
+                   "started: cache_start.")
             .build();
     return s;
 }

@@ -21,6 +21,7 @@ struct CacheSettings {
     float depth_tolerance = 0.01f;  // z-buffer test: relative depth difference allowed
     float max_megabytes = 256.0f;   // memory cap: the oldest entries are evicted beyond it
     int checkpoint_every = 10;      // the workbench's checkpoints (render/frame_checkpoint.h)
+    bool cold_start = false;        // comparison: every frame from an empty cache
     static const SettingsSchema& schema();
 };
 
