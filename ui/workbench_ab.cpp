@@ -85,7 +85,10 @@ void poll_run_a(Workbench::State& s) {
         return;
     }
     // A's own recording may have grown since it was kept (it rendered on in the background).
-    if (!s.run_a->stats.count(frame)) s.run_a->stats = recorded_frame_stats(s.run_a->dir);
+    if (!s.run_a->stats.count(frame) && s.run_a->rescanned_for != frame) {
+        s.run_a->stats = recorded_frame_stats(s.run_a->dir);
+        s.run_a->rescanned_for = frame;
+    }
     if (!s.run_a->stats.count(frame)) return;
     try {
         s.references[frame] = read_recorded_frame(s.run_a->dir, s.run_a->key, frame).layers;

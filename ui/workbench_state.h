@@ -41,6 +41,7 @@ struct RunA {
     std::filesystem::path dir;
     std::string method;
     std::map<int, nlohmann::json> stats;  // A's recorded frames
+    int rescanned_for = -1;               // the frame A's folder was last read again for
 };
 constexpr const char* kRunALayer = "run_a";
 

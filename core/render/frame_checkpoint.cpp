@@ -38,6 +38,22 @@ json frame_checkpoint_key(const json& provenance) {
     return key;
 }
 
+uint64_t read_run_file_frame(ByteReader& r, std::string_view bytes, const std::string& source,
+                             uint32_t magic, uint32_t version, const std::string& what) {
+    if (bytes.size() < 2 * sizeof(uint32_t) + sizeof(uint64_t))
+        throw Error(source, "header",
+                    "not a freqlab " + what + " (" + std::to_string(bytes.size()) + " bytes)");
+    if (r.get<uint32_t>() != magic) throw Error(source, "header", "not a freqlab " + what);
+    const uint32_t found = r.get<uint32_t>();
+    if (found != version)
+        throw Error(
+            source, "version",
+            "format " + std::to_string(found) + ", this freqlab reads " + std::to_string(version));
+    uint64_t trailer = 0;
+    std::memcpy(&trailer, bytes.data() + bytes.size() - sizeof trailer, sizeof trailer);
+    return trailer;
+}
+
 void check_run_key(const json& found, const json& key, const std::string& source) {
     for (const char* field : kKeyFields)
         if (found.value(field, json()) != key.value(field, json()))
@@ -63,18 +79,9 @@ void write_frame_checkpoint(const fs::path& file, const json& key, int frame,
 FrameCheckpoint read_frame_checkpoint(const fs::path& file, const json& key) {
     const std::string bytes = read_text_file(file);
     const std::string source = file.string();
-    if (bytes.size() < 2 * sizeof(uint32_t) + sizeof(uint64_t))
-        throw Error(source, "header",
-                    "not a freqlab checkpoint (" + std::to_string(bytes.size()) + " bytes)");
     ByteReader r(bytes, source, "checkpoint");
-    if (r.get<uint32_t>() != kMagic) throw Error(source, "header", "not a freqlab checkpoint");
-    const uint32_t version = r.get<uint32_t>();
-    if (version != kFrameCheckpointVersion)
-        throw Error(source, "version",
-                    "format " + std::to_string(version) + ", this freqlab reads " +
-                        std::to_string(kFrameCheckpointVersion));
-    uint64_t stored = 0;
-    std::memcpy(&stored, bytes.data() + bytes.size() - sizeof stored, sizeof stored);
+    const uint64_t stored =
+        read_run_file_frame(r, bytes, source, kMagic, kFrameCheckpointVersion, "checkpoint");
     if (stored != fnv1a(bytes.substr(0, bytes.size() - sizeof stored)))
         throw Error(source, "checksum", "the file is damaged or truncated");
     json found;

@@ -20,6 +20,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "base/byte_stream.h"
+
 namespace freqlab {
 
 constexpr uint32_t kFrameCheckpointVersion = 1;
@@ -35,6 +37,12 @@ nlohmann::json frame_checkpoint_key(const nlohmann::json& provenance);
 // seed) where `found` differs from `key`: a file another run wrote.
 void check_run_key(const nlohmann::json& found, const nlohmann::json& key,
                    const std::string& source);
+
+// The frame of a run-store file (checkpoint, recorded frame): `magic`, then `version`, ..., a
+// 64-bit trailer. Checks the size, magic and version (Error naming `source`, fields "header" /
+// "version"; `what` names the kind of file), returns the trailer; `r` is left after the version.
+uint64_t read_run_file_frame(ByteReader& r, std::string_view bytes, const std::string& source,
+                             uint32_t magic, uint32_t version, const std::string& what);
 
 // Written atomically (no half-written file under the name).
 void write_frame_checkpoint(const std::filesystem::path& file, const nlohmann::json& key, int frame,

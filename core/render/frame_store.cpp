@@ -93,18 +93,9 @@ FrameResult read_recorded_frame(const fs::path& dir, const json& key, int frame)
     const std::string source = file.string();
     const MappedFile mapped(file);
     const std::string_view bytes = mapped.bytes();
-    if (bytes.size() < 2 * sizeof(uint32_t) + sizeof(uint64_t))
-        throw Error(source, "header",
-                    "not a freqlab recorded frame (" + std::to_string(bytes.size()) + " bytes)");
     ByteReader r(bytes, source, "frame");
-    if (r.get<uint32_t>() != kMagic) throw Error(source, "header", "not a freqlab recorded frame");
-    const uint32_t version = r.get<uint32_t>();
-    if (version != kRecordedFrameVersion)
-        throw Error(source, "version",
-                    "format " + std::to_string(version) + ", this freqlab reads " +
-                        std::to_string(kRecordedFrameVersion));
-    uint64_t stored = 0;
-    std::memcpy(&stored, bytes.data() + bytes.size() - sizeof stored, sizeof stored);
+    const uint64_t stored =
+        read_run_file_frame(r, bytes, source, kMagic, kRecordedFrameVersion, "recorded frame");
     if (stored != bytes.size() - sizeof stored)
         throw Error(source, "size", "the file is truncated or damaged");
     try {
