@@ -74,7 +74,8 @@ int run_bench(const BenchArgs& a) {
     if (a.runs < 1) throw Error("--runs", std::to_string(a.runs), "expected at least 1");
     if (a.out.empty()) throw Error("--out", "", "expected an output directory");
     const Scene scene = load_scene(a.scene);
-    const auto [w, h] = parse_size(a.size, "--size");
+    const std::pair<int, int> size = parse_size(a.size, "--size");
+    const int w = size.first, h = size.second;
     if (a.frame < 0 || a.frame >= scene.frame_count)
         throw Error("--frame", std::to_string(a.frame), "expected a frame of the scene");
     EmbreeDevice device(0);

@@ -78,9 +78,11 @@ int run_bench_cache(const BenchArgs& a) {
     if (a.error_every < 1)
         throw Error("--error-every", std::to_string(a.error_every), "expected >= 1");
     const Scene scene = load_scene(a.scene);
-    const auto [w, h] = parse_size(a.size, "--size");
-    const auto [first, last] = parse_frame_range(
+    const std::pair<int, int> size = parse_size(a.size, "--size");
+    const int w = size.first, h = size.second;
+    const std::pair<int, int> range = parse_frame_range(
         a.frames.empty() ? "0:" + std::to_string(scene.frame_count) : a.frames, scene.frame_count);
+    const int first = range.first, last = range.second;
     EmbreeDevice device(0);
     auto config_for = [&](RenderMethod method, const std::vector<std::string>& extra) {
         return bench_config(method, a.sets, extra, w, h);

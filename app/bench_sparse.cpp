@@ -30,7 +30,8 @@ int run_bench_sparse(const BenchArgs& a) {
     if (a.out.empty()) throw Error("--out", "", "expected an output directory");
     if (a.runs < 1) throw Error("--runs", std::to_string(a.runs), "expected >= 1");
     const Scene scene = load_scene(a.scene);
-    const auto [w, h] = parse_size(a.size, "--size");
+    const std::pair<int, int> size = parse_size(a.size, "--size");
+    const int w = size.first, h = size.second;
     if (a.frame < 0 || a.frame >= scene.frame_count)
         throw Error("--frame", std::to_string(a.frame),
                     "expected a frame in 0.." + std::to_string(scene.frame_count - 1));

@@ -53,7 +53,7 @@ int headless_fallback(const std::string& scene, int frame) {
 
 #ifdef FREQLAB_HAS_UI
 // `bench --study scrub`: method cache on the scene at --size, --set applied.
-int run_scrub_study(const freqlab::BenchArgs& a, int jumps) {
+int run_scrub_study(const freqlab::BenchArgs& a, int jumps, int cache_change_trials) {
     const auto [w, h] = freqlab::parse_size(a.size, "--size");
     freqlab::ui::ScrubBenchOptions o;
     o.workbench.scene = a.scene;
@@ -62,6 +62,7 @@ int run_scrub_study(const freqlab::BenchArgs& a, int jumps) {
                             "frame.height=" + std::to_string(h)};
     o.workbench.settings.insert(o.workbench.settings.end(), a.sets.begin(), a.sets.end());
     o.jumps = jumps;
+    o.cache_change_trials = cache_change_trials;
     o.out = a.out;
     return freqlab::ui::run_scrub_bench(o);
 }
@@ -232,6 +233,12 @@ int main(int argc, char** argv) {
         "random jumps across it");
     int scrub_jumps = 100;
     bench->add_option("--jumps", scrub_jumps, "scrub study: random jumps timed");
+    int scrub_cache_changes = 3;
+    bench
+        ->add_option("--cache-change-trials", scrub_cache_changes,
+                     "scrub study: cache.q_eps_x changes at frame 60 timed with the shading "
+                     "memo and from scratch (0: none)")
+        ->check(CLI::NonNegativeNumber);
     bench->add_option("--frames", ba.frames, "cache studies: A:B (default: all frames)");
     bench->add_option("--error-every", ba.error_every,
                       "cache studies: RMSE against the reference every k-th frame");
@@ -278,7 +285,7 @@ int main(int argc, char** argv) {
         if (*bake) return freqlab::run_bake(bk);
         if (*bench && ba.study == "scrub") {
 #ifdef FREQLAB_HAS_UI
-            return run_scrub_study(ba, scrub_jumps);
+            return run_scrub_study(ba, scrub_jumps, scrub_cache_changes);
 #else
             throw freqlab::Error("--study", "scrub", "needs the workbench (built without UI)");
 #endif

@@ -1,21 +1,20 @@
 #!/usr/bin/env bash
-# The default test suite under AddressSanitizer + UndefinedBehaviorSanitizer (+ LeakSanitizer):
-# builds freqlab instrumented in build-sanitize/ and runs `ctest -LE slow` there: unit, table and
-# integration (CLI) tests; without the workbench (FREQLAB_BUILD_UI=OFF), so not the window / gl
-# tests (OSMesa's llvmpipe under ASan: minutes a frame, and its own leaks), nor the
-# cancel-at-random test (label signals: 50 instrumented processes), nor cli.tables_generate when
-# the release suite's table file is there (see below). Any report
-# fails the run, also one raised inside a test that expects its command to fail (reports are
+# The default test suite under AddressSanitizer + UndefinedBehaviorSanitizer (+ LeakSanitizer),
+# and the fuzz targets: builds freqlab instrumented in build-sanitize/ (clang, with libFuzzer's
+# coverage: scripts/instrumented_build.sh) and runs `ctest -LE slow` there: unit and
+# integration (CLI) tests and the fuzz tests (FREQLAB_FUZZ_RUNS inputs each, scripts/fuzz.sh);
+# without the workbench (FREQLAB_BUILD_UI=OFF), so not the window / gl tests (OSMesa's
+# llvmpipe under ASan: minutes a frame, and its own leaks), nor the cancel-at-random test (label
+# signals: 50 instrumented processes), nor cli.tables_generate when the release suite's table
+# file is there (see below). Any report fails the run, also one raised inside a test that expects its command to fail (reports are
 # logged to files and counted after ctest). Run after scripts/setup.sh (it installs packages).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-jobs=$(nproc 2>/dev/null || echo 2)
-# -O1: compiles in about half the time of -O2 and runs the suite at a usable speed.
-cmake -S . -B build-sanitize -DFREQLAB_MPI=OFF -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS_RELEASE="-O1 -g1" \
-  -DFREQLAB_SANITIZE=address,undefined -DFREQLAB_BUILD_UI=OFF >/dev/null
-# Only what the sanitized suite runs (not the benchmarks, the slow tests, the cancel test).
-cmake --build build-sanitize -j "$jobs" --target freqlab freqlab_unit_tests freqlab_table_tests
+source scripts/instrumented_build.sh
+# Only what the sanitized suite runs (not the benchmarks, the slow tests, the cancel test, the
+# table tests' binary: see below), and the fuzz targets.
+cmake --build build-sanitize -j "$jobs" --target freqlab freqlab_unit_tests "${fuzz_targets[@]}"
 
 reports=$(mktemp -d)
 trap 'rm -rf "$reports"' EXIT
@@ -27,8 +26,8 @@ export LSAN_OPTIONS="suppressions=$PWD/tests/sanitize/lsan.supp:print_suppressio
 # The slow tests are not built here (their discovery leaves a freqlab_slow_tests_NOT_BUILT).
 # The three longest tests under ASan are left to the release suite (CI ran 2038 s on this
 # machine in session 24, over its 30 minutes): the stability sweep (146 s here; its NaN/Inf
-# checks run in release), the table tests' binary (118 s; the tables' code is sanitized through
-# the unit tests that build small tables) and the cache memory cap (52 s).
+# checks run in release), the table tests' binary (118 s, not built here; the tables' code is
+# sanitized through the unit tests that build small tables) and the cache memory cap (52 s).
 excluded="_NOT_BUILT$|^cli\.stability_sweep$|^unit\.impulse_tables$"
 excluded="$excluded|^MemoryCaps\.CacheKeepsItsLivePointsUnderTheCap$"
 fixture_args=()
@@ -37,15 +36,6 @@ if compgen -G "build/tests/cache/tables/impulse_v*_b*.bin" >/dev/null; then
   cp build/tests/cache/tables/impulse_v*_b*.bin build-sanitize/tests/cache/tables/
   fixture_args=(-FS tables_cache)
   excluded="$excluded|^cli\.tables_generate$"
-fi
-# Likewise the table tests' shared set (tests/shared_tables.h): building it under ASan was 290 s,
-# half the sanitized suite. What that leaves unsanitized: the tabulation of the area and the
-# multiple-scattering tables (point and directional single scattering and the slab bottom are
-# built by unit tests here); a run without build/ (or deleting build-sanitize/tests/cache)
-# builds everything sanitized again.
-if [[ -f build/tests/cache/shared_tables_b4.bin ]]; then
-  mkdir -p build-sanitize/tests/cache
-  cp build/tests/cache/shared_tables_b4.bin build-sanitize/tests/cache/
 fi
 status=0
 ctest --test-dir build-sanitize -LE "slow|signals" -E "$excluded" "${fixture_args[@]}" --output-on-failure -j "$jobs" ||

@@ -5,17 +5,26 @@
 //   2. reopen: a new workbench on the same run, time to its first frame on screen;
 //   3. jumps: --jumps random frames (seeded, never the frame shown), each timed from
 //      set_frame() to the UI frame that draws it, GL finished (the workbench loop).
+//   4. a cache.* change (method cache, acceptance 3): at frame F = min(60, last) of a run just
+//      rendered, cache.q_eps_x set to another value: time until frame F (rendered again from
+//      frame 0) is on screen, by a workbench with its shading memo (render/shading_memo.h) and
+//      by one without (FREQLAB_SHADING_MEMO_MB=0: the run from scratch, scene and Embree
+//      already loaded); interleaved, --cache-change-trials times, into temporary run stores.
 // Reported: the jumps' p50 / p95 / max, how many were read from the run store, resident memory
 // (now and peak) after recording and after the jumps, the decoded frames' bytes, the run
-// store's size on disk.
+// store's size on disk; the cache change's times and their ratio.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
+#include <optional>
 #include <random>
 #include <string>
+
+#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
@@ -72,6 +81,78 @@ void until_shown(OsMesaHost& host, Workbench& wb) {
         if (!wb.frame_shown()) wb.wait_for_render();
     }
     if (!wb.frame_shown()) throw Error("bench --study scrub", "", "the frame was never shown");
+}
+
+// Sets $name to value for this scope, then puts back what was there.
+class ScopedEnvironment {
+  public:
+    ScopedEnvironment(const char* name, const std::string& value) : name_(name) {
+        if (const char* old = std::getenv(name)) old_ = old;
+        ::setenv(name, value.c_str(), 1);
+    }
+    ~ScopedEnvironment() {
+        if (old_)
+            ::setenv(name_, old_->c_str(), 1);
+        else
+            ::unsetenv(name_);
+    }
+
+  private:
+    const char* name_;
+    std::optional<std::string> old_;
+};
+
+// Step 4 (see the top). Two workbenches on the run, each with its own temporary run store, one
+// with a shading memo and one without (FREQLAB_SHADING_MEMO_MB=0), both first render frames
+// 0..F as recorded (the memo then holds what a researcher who rendered them has: nothing is
+// read from the run store), then each trial sets another cache.q_eps_x on both, in turn.
+json cache_change_study(OsMesaHost& host, const WorkbenchOptions& wo, int trials) {
+    const fs::path store =
+        fs::temp_directory_path() / ("freqlab_scrub_bench_" + std::to_string(::getpid()));
+    std::unique_ptr<Workbench> with_memo_wb, scratch_wb;
+    int target = 0;
+    for (bool memo : {true, false}) {
+        ScopedEnvironment dir("FREQLAB_RUN_STORE_DIR",
+                              (store / (memo ? "memo" : "scratch")).string());
+        std::optional<ScopedEnvironment> cap;
+        if (!memo) cap.emplace("FREQLAB_SHADING_MEMO_MB", "0");
+        WorkbenchOptions so = wo;
+        so.frame = 0;
+        auto wb = std::make_unique<Workbench>(so);
+        until_shown(host, *wb);
+        target = std::min(60, int(wb->frame_count()) - 1);
+        wb->set_frame(target);
+        until_shown(host, *wb);
+        (memo ? with_memo_wb : scratch_wb) = std::move(wb);
+    }
+    std::vector<double> with_memo, from_scratch;
+    json values = json::array();
+    for (int t = 0; t < trials; ++t) {
+        const std::string value = "cache.q_eps_x=" + std::to_string(2e-4 * (t + 1));
+        values.push_back(value);
+        for (Workbench* wb : {with_memo_wb.get(), scratch_wb.get()}) {
+            const bool memo = wb == with_memo_wb.get();
+            ScopedEnvironment dir("FREQLAB_RUN_STORE_DIR",
+                                  (store / (memo ? "memo" : "scratch")).string());
+            const auto t0 = Clock::now();
+            wb->apply_setting(value);
+            until_shown(host, *wb);
+            (memo ? with_memo : from_scratch).push_back(ms_since(t0));
+            if (wb->frame() != target) throw Error("bench --study scrub", "", "frame moved");
+        }
+        std::fprintf(stderr, "%s at frame %d: %.1f s with the memo, %.1f s from scratch\n",
+                     value.c_str(), target, with_memo.back() / 1000.0,
+                     from_scratch.back() / 1000.0);
+    }
+    with_memo_wb.reset();
+    scratch_wb.reset();
+    std::error_code ec;
+    fs::remove_all(store, ec);
+    const double a = percentile(with_memo, 0.5), b = percentile(from_scratch, 0.5);
+    return {{"frame", target},           {"values", values},
+            {"with_memo_ms", with_memo}, {"from_scratch_ms", from_scratch},
+            {"with_memo_median_ms", a},  {"from_scratch_median_ms", b},
+            {"ratio_of_medians", a / b}};
 }
 
 json memory_now(const Workbench& wb) {
@@ -146,6 +227,8 @@ int run_scrub_bench(const ScrubBenchOptions& o) {
                        {"max_ms", percentile(times, 1.0)},
                        {"ms", times}};
     report["after_jumps"] = memory_now(wb);
+    if (o.cache_change_trials > 0 && wb.method() == "cache")
+        report["cache_change"] = cache_change_study(host, o.workbench, o.cache_change_trials);
     // A new frame (acceptance 5): frame 0 of a run not recorded (another cache.q_eps_x), from the
     // change to its first image on screen and to the frame; UI frames polled, not waited.
     wb.set_frame(0);
@@ -182,6 +265,16 @@ int run_scrub_bench(const ScrubBenchOptions& o) {
         report["record"]["run_store_mb"].get<double>());
     std::printf("new frame (5 runs of cache.q_eps_x): first image median %.0f ms, frame %.0f ms\n",
                 percentile(first, 0.5), percentile(full, 0.5));
+    if (report.contains("cache_change")) {
+        const json& c = report["cache_change"];
+        std::printf(
+            "cache.q_eps_x changed at frame %d (%zu trials): %.1f s with the shading memo, "
+            "%.1f s from scratch (medians): ratio %.2f\n",
+            c["frame"].get<int>(), c["values"].size(),
+            c["with_memo_median_ms"].get<double>() / 1000.0,
+            c["from_scratch_median_ms"].get<double>() / 1000.0,
+            c["ratio_of_medians"].get<double>());
+    }
     std::printf("wrote %s\n", (fs::path(o.out) / "bench_scrub.json").c_str());
     return 0;
 }

@@ -66,6 +66,12 @@ void restart_renderer(Workbench::State& s) {
         output_provenance(s.scene, render_method_info(s.config.method).name,
                           s.config.settings_group().to_json(), long(s.config.frame.seed)));
     s.run_dir = run_store_directory(s.run_key);
+    const nlohmann::json memo_key = ShadingMemo::key_of(s.run_key);
+    if (!s.shading_memo || memo_key != s.shading_memo_key) {
+        s.shading_memo = std::make_shared<ShadingMemo>(s.shading_memo_cap);
+        s.shading_memo_key = memo_key;
+    }
+    if (s.renderer) s.renderer->set_shading_memo(s.shading_memo);
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
         s.recorded = recorded_frame_stats(s.run_dir);
@@ -461,6 +467,8 @@ void Workbench::reset(const WorkbenchOptions& options, Scene* loaded) {
     s.error.clear();
     try {
         s.results = DecodedFrames(decoded_frames_cap());
+        s.shading_memo_cap = ShadingMemo::default_max_bytes();
+        s.shading_memo.reset();
         s.scene = loaded ? std::move(*loaded) : load_scene(options.scene);
         s.bake.reset();
         if (!s.device) s.device = std::make_unique<EmbreeDevice>(0);

@@ -175,6 +175,7 @@ int run_headless(const WorkbenchOptions& options);   // OSMesa; writes options.s
 struct ScrubBenchOptions {
     WorkbenchOptions workbench;  // scene, method, settings
     int jumps = 100;
+    int cache_change_trials = 3;  // step 4: cache.q_eps_x changes timed (0: skipped)
     uint64_t seed = 1;
     std::string out = "freqlab-out/bench";
 };

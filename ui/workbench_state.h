@@ -60,6 +60,11 @@ struct Workbench::State {
     nlohmann::json run_key;
     std::filesystem::path run_dir;
     int job_resumed_from = -1;  // the checkpoint the running job restored (-1: none)
+    // Radiance points the runs of this session shaded (render/shading_memo.h), kept while the
+    // settings that shade them stay: a cache.* change re-runs the cache without shading again.
+    std::shared_ptr<ShadingMemo> shading_memo;
+    nlohmann::json shading_memo_key;
+    size_t shading_memo_cap = 0;  // $FREQLAB_SHADING_MEMO_MB, read when the scene opens
     // A render cancelled by the user stays cancelled: no job starts for this frame again until
     // the frame or a setting changes, or the status line's "render" is pressed.
     int cancelled_frame = -1;

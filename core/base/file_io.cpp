@@ -90,6 +90,20 @@ MappedFile::~MappedFile() {
     if (data_) ::munmap(const_cast<char*>(data_), size_);
 }
 
+// $NAME in bytes (`fallback` MB when unset); anything but a number of megabytes >= 0 is
+// refused naming the variable.
+size_t megabytes_from_environment(const char* name, double fallback) {
+    const char* env = std::getenv(name);
+    double mb = fallback;
+    if (env && *env) {
+        char* end = nullptr;
+        mb = std::strtod(env, &end);
+        if (end == env || *end != '\0' || !(mb >= 0.0) || mb > 1e9)
+            throw Error(name, "", std::string("expected megabytes >= 0, got '") + env + "'");
+    }
+    return size_t(mb * 1024.0 * 1024.0);
+}
+
 fs::path cache_directory() {
     if (const char* d = std::getenv("FREQLAB_CACHE_DIR"); d && *d) return d;
     if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) return fs::path(x) / "freqlab";

@@ -38,4 +38,8 @@ class MappedFile {
 // ~/.cache/freqlab, else a temporary folder.
 std::filesystem::path cache_directory();
 
+// $NAME in bytes (`fallback` MB when unset); anything but a number of megabytes >= 0 is
+// refused naming the variable.
+size_t megabytes_from_environment(const char* name, double fallback);
+
 }  // namespace freqlab

@@ -163,7 +163,8 @@ FrameResult FrameRenderer::render(int frame, Progress& progress) {
                               record_,
                               result,
                               progress,
-                              preview_ ? &preview_ : nullptr};
+                              preview_ ? &preview_ : nullptr,
+                              memo_.get()};
         MethodOutput out = method.render(context);
         rays += out.rays;
         guarded = out.nonfinite;

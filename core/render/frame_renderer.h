@@ -17,6 +17,7 @@
 #include "render/radiance_point.h"
 #include "render/reconstruction.h"
 #include "render/reference_cache.h"
+#include "render/shading_memo.h"
 #include "settings/cache_settings.h"
 #include "settings/render_settings.h"
 #include "settings/settings_group.h"
@@ -86,6 +87,10 @@ class FrameRenderer {
     // Methods sparse and cache hand a first image of each frame to `sink` while it renders
     // (render/sparse_pass.h); called on the rendering thread. Empty: none.
     void set_preview_sink(std::function<void(LayerSet&&)> sink) { preview_ = std::move(sink); }
+    // Methods sparse and cache recall radiance points from `memo` where an earlier run shaded
+    // the same ones, and add theirs (render/shading_memo.h). The owner keys the memo
+    // (ShadingMemo::key_of); null: every point is shaded.
+    void set_shading_memo(std::shared_ptr<ShadingMemo> memo) { memo_ = std::move(memo); }
     // Methods that reconstruct record pixel (record->x, record->y)'s contributions into
     // *record during the next renders (null: none).
     void record_reconstruction(ReconstructionRecord* record) { record_ = record; }
@@ -106,6 +111,7 @@ class FrameRenderer {
     std::unique_ptr<MethodState> method_state_;         // the method's across frames
     bool keep_cache_details_ = false;
     std::function<void(LayerSet&&)> preview_;
+    std::shared_ptr<ShadingMemo> memo_;
     ReconstructionRecord* record_ = nullptr;
     const EnvBandwidthHierarchy* bandwidth();
 };

@@ -25,20 +25,6 @@ fs::path stats_path(const fs::path& dir, int frame) {
     return fs::path(recorded_frame_path(dir, frame)).replace_extension(".json");
 }
 
-// $NAME in bytes (`fallback` MB when unset); anything but a number of megabytes >= 0 is
-// refused naming the variable.
-size_t megabytes_from_environment(const char* name, double fallback) {
-    const char* env = std::getenv(name);
-    double mb = fallback;
-    if (env && *env) {
-        char* end = nullptr;
-        mb = std::strtod(env, &end);
-        if (end == env || *end != '\0' || !(mb >= 0.0) || mb > 1e9)
-            throw Error(name, "", std::string("expected megabytes >= 0, got '") + env + "'");
-    }
-    return size_t(mb * 1024.0 * 1024.0);
-}
-
 template <class T>
 size_t vector_bytes(const std::shared_ptr<const std::vector<T>>& v) {
     return v ? v->size() * sizeof(T) : 0;

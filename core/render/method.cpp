@@ -75,8 +75,8 @@ MethodOutput sparse_output(SparsePassOutput&& out) {
 MethodOutput render_sparse_method(MethodContext& c) {
     return sparse_output(render_sparse(c.rays, c.gbuffer, c.frame, c.config.frame, c.config.shading,
                                        c.config.points, c.config.sparse, c.bandwidth,
-                                       c.result.layers, c.progress, nullptr,
-                                       c.reconstruction_record, c.preview));
+                                       c.result.layers, c.progress,
+                                       {nullptr, c.reconstruction_record, c.preview, c.memo}));
 }
 
 struct CacheMethodState : MethodState {
@@ -107,8 +107,8 @@ MethodOutput render_cache_method(MethodContext& c) {
     const CacheHook hook{state, c.config.cache};
     SparsePassOutput out =
         render_sparse(c.rays, c.gbuffer, c.frame, c.config.frame, c.config.shading, c.config.points,
-                      c.config.sparse, c.bandwidth, c.result.layers, c.progress, &hook,
-                      c.reconstruction_record, c.preview);
+                      c.config.sparse, c.bandwidth, c.result.layers, c.progress,
+                      {&hook, c.reconstruction_record, c.preview, c.memo});
     state.last_frame = c.frame;
     c.result.sample_positions =
         std::make_shared<const std::vector<std::pair<int, vec3>>>(std::move(out.moved_samples));

@@ -32,6 +32,7 @@ struct ReconstructionRecord;
 struct RadiancePoint;
 class RayScene;
 class EnvBandwidthHierarchy;
+class ShadingMemo;
 struct CameraRayGenerator;
 enum class SampleSequence;
 
@@ -59,6 +60,8 @@ struct MethodContext {
     Progress& progress;
     // FrameRenderer::set_preview_sink: methods that can show a first image hand it here.
     const std::function<void(LayerSet&&)>* preview = nullptr;
+    // FrameRenderer::set_shading_memo: methods that shade radiance points recall them there.
+    ShadingMemo* memo = nullptr;
 };
 struct MethodOutput {
     long rays = 0;       // beyond the G-buffer's

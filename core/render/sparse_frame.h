@@ -39,8 +39,11 @@ struct SparseFrame {
     void write_layers();
     SparsePassOutput finish();
 
-    // A fresh radiance point at pixel i (pass 0 initial, 1 adaptive, 2 fallback).
-    void shade(size_t i, uint64_t pass);
+    // A fresh radiance point at pixel i (pass 0 initial, 1 adaptive, 2 fallback): recalled
+    // from `table` when an earlier run shaded it with the same plan, else shaded (then, with a
+    // memo, *added describes it for the memo). Returns true when recalled.
+    bool shade(size_t i, uint64_t pass, const ShadingMemo::FrameTable* table,
+               ShadingMemo::Entry* added);
     void shade_all(const std::vector<int>& pixels, uint64_t pass);
     RadiancePoint& point_at(size_t i) { return shaded_points[size_t(point_slot[i])]; }
     // Adaptive and fallback points keep the upsampled statistics as their features; only
@@ -78,6 +81,8 @@ struct SparseFrame {
     std::vector<vec3> value;
     std::vector<SampleKind> kind;
     std::atomic<long> rays{0};
+    ShadingMemo* memo = nullptr;  // SparseHooks::memo
+    std::atomic<long> recalled{0}, recalled_rays{0};
     std::atomic<long> nonfinite{0};  // colours that were NaN / Inf (written as 0)
     // The upsampled visibility statistics (step 2); adaptive points plan their sample count
     // from them.

@@ -136,34 +136,62 @@ SparseFrame::SparseFrame(const RayScene& rs_, const GBuffer& gb_, int frame_,
     result.stats["stages"]["setup"] = ms_since(t_setup);
 }
 
-void SparseFrame::shade(size_t i, uint64_t pass) {
+bool SparseFrame::shade(size_t i, uint64_t pass, const ShadingMemo::FrameTable* table,
+                        ShadingMemo::Entry* added) {
     const int x = int(i % size_t(w)), y = int(i / size_t(w));
-    CounterRng rng(uint64_t(fs.seed) ^ kPointsStream, uint64_t(frame), i, pass);
     std::optional<VisibilityPlan> plan;
     if (pass == 1 && sparse.plan_samples && found[i] && !mirror[i])
         plan = plan_from_neighbours(stats[i], integrator.large_distance(), cache != nullptr);
-    RadiancePoint rp =
-        integrator.integrate_hit(gb.hits[i], -gb.view_dirs[i], point_context(gb, x, y, rs.time()),
-                                 rng, plan ? &*plan : nullptr);
-    if (!std::isfinite(rp.radiance.x + rp.radiance.y + rp.radiance.z)) rp = RadiancePoint{};
-    rp.cone_samples.clear();
-    rp.cone_samples.shrink_to_fit();
-    rays.fetch_add(rp.rays, std::memory_order_relaxed);
+    const VisibilityPlan* p = plan ? &*plan : nullptr;
+    const RadiancePoint* known = table ? table->find(uint32_t(i), uint8_t(pass), p) : nullptr;
+    RadiancePoint rp;
+    if (known) {
+        rp = *known;
+        recalled.fetch_add(1, std::memory_order_relaxed);
+        recalled_rays.fetch_add(rp.rays, std::memory_order_relaxed);
+    } else {
+        CounterRng rng(uint64_t(fs.seed) ^ kPointsStream, uint64_t(frame), i, pass);
+        rp = integrator.integrate_hit(gb.hits[i], -gb.view_dirs[i],
+                                      point_context(gb, x, y, rs.time()), rng, p);
+        if (!std::isfinite(rp.radiance.x + rp.radiance.y + rp.radiance.z)) rp = RadiancePoint{};
+        rp.cone_samples.clear();
+        rp.cone_samples.shrink_to_fit();
+        rays.fetch_add(rp.rays, std::memory_order_relaxed);
+        if (added) {
+            added->pixel = uint32_t(i);
+            added->pass = uint8_t(pass);
+            added->planned = p != nullptr;
+            if (p) added->plan = *p;
+            added->point = rp;
+        }
+    }
     value[i] = mirror[i] ? rp.radiance : demodulate(rp.radiance, shading_points[i].albedo);
     point_at(i) = std::move(rp);
     fresh[i] = sampled[i] = 1;
+    return known != nullptr;
 }
 
 void SparseFrame::shade_all(const std::vector<int>& pixels, uint64_t pass) {
     const size_t base = shaded_points.size();
     shaded_points.resize(base + pixels.size());
     for (size_t k = 0; k < pixels.size(); ++k) point_slot[size_t(pixels[k])] = int(base + k);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels.size(), 16),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          progress.checkpoint();
-                          for (size_t k = r.begin(); k < r.end(); ++k)
-                              shade(size_t(pixels[k]), pass);
-                      });
+    const std::shared_ptr<const ShadingMemo::FrameTable> table =
+        memo ? memo->frame(frame) : nullptr;
+    std::vector<ShadingMemo::Entry> added(memo ? pixels.size() : 0);
+    std::vector<char> was_recalled(pixels.size(), 0);
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, pixels.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+            progress.checkpoint();
+            for (size_t k = r.begin(); k < r.end(); ++k)
+                was_recalled[k] =
+                    shade(size_t(pixels[k]), pass, table.get(), memo ? &added[k] : nullptr);
+        });
+    if (!memo) return;
+    size_t kept = 0;
+    for (size_t k = 0; k < added.size(); ++k)
+        if (!was_recalled[k]) added[kept++] = std::move(added[k]);
+    added.resize(kept);
+    memo->add(frame, std::move(added));
 }
 
 void SparseFrame::own_features_where_unknown(const std::vector<int>& pixels) {
@@ -462,6 +490,13 @@ SparsePassOutput SparseFrame::finish() {
     result.stats["fallback_pixels"] = rec.fallback_pixels;
     result.stats["pixels_shaded"] = shaded;
     result.stats["pixels_new"] = shaded;
+    if (memo) {
+        // Recalled points cast no ray now: `rays` counts what this frame cast.
+        result.stats["shading_memo"] = {{"recalled", recalled.load()},
+                                        {"shaded", shaded - recalled.load()},
+                                        {"rays_recalled", recalled_rays.load()}};
+        memo->count_recalled(recalled.load());
+    }
     return std::move(result);
 }
 
@@ -469,13 +504,14 @@ SparsePassOutput render_sparse(const RayScene& rs, const GBuffer& gb, int frame,
                                const FrameSettings& fs, const ShadingSettings& shading,
                                const PointsSettings& points, const SparseSettings& sparse,
                                const EnvBandwidthHierarchy* bandwidth, LayerSet& layers,
-                               Progress& progress, const CacheHook* cache,
-                               ReconstructionRecord* record, const PreviewSink* preview) {
-    SparseFrame f(rs, gb, frame, fs, shading, points, sparse, bandwidth, layers, progress, cache,
-                  record);
+                               Progress& progress, const SparseHooks& hooks) {
+    SparseFrame f(rs, gb, frame, fs, shading, points, sparse, bandwidth, layers, progress,
+                  hooks.cache, hooks.record);
+    f.memo = hooks.memo;
+    const bool cache = hooks.cache != nullptr;
     if (cache) f.cache_reproject();
     f.initial_points();
-    if (preview && *preview) (*preview)(f.preview_image());
+    if (hooks.preview && *hooks.preview) (*hooks.preview)(f.preview_image());
     f.upsample();
     if (cache) f.cache_resolve();
     f.compute_density();

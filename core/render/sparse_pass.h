@@ -18,6 +18,7 @@
 #include "render/gbuffer.h"
 #include "render/radiance_point.h"
 #include "render/reconstruction.h"
+#include "render/shading_memo.h"
 #include "settings/sparse_settings.h"
 
 namespace freqlab {
@@ -47,13 +48,21 @@ struct CacheHook {
 // adaptive points render.
 using PreviewSink = std::function<void(LayerSet&&)>;
 
+// What a run attaches to a frame of the pipeline (all optional).
+struct SparseHooks {
+    const CacheHook* cache = nullptr;        // method A's cache (`--method cache`)
+    ReconstructionRecord* record = nullptr;  // a pixel's reconstruction contributions
+    const PreviewSink* preview = nullptr;    // the first image
+    // Points shaded by an earlier run with the same shading inputs (render/shading_memo.h):
+    // recalled instead of shaded, and this frame's new points added.
+    ShadingMemo* memo = nullptr;
+};
+
 SparsePassOutput render_sparse(const RayScene& scene, const GBuffer& gbuffer, int frame,
                                const FrameSettings& frame_settings, const ShadingSettings& shading,
                                const PointsSettings& points, const SparseSettings& sparse,
                                const EnvBandwidthHierarchy* bandwidth, LayerSet& layers,
-                               Progress& progress, const CacheHook* cache = nullptr,
-                               ReconstructionRecord* record = nullptr,
-                               const PreviewSink* preview = nullptr);
+                               Progress& progress, const SparseHooks& hooks = {});
 
 // The `sampled` layer's categories.
 // (The layer adds 4 = reused for the cache's entries.)

@@ -1,7 +1,7 @@
 // Writes the binary seeds of the fuzz corpora and the stub assets the scene fuzzer resolves
 // against (tests/fuzz/assets: small stand-ins for the Debian packages' maps, meshes and
 // textures, so that one input loads in milliseconds). Run by hand when a seed changes:
-//   build-fuzz/tests/fuzz/fuzz_make_seeds tests/fuzz
+//   build-sanitize/tests/fuzz/fuzz_make_seeds tests/fuzz
 // The outputs are committed; nothing runs this in CI.
 #include <cmath>
 #include <cstdio>
