@@ -5,22 +5,25 @@
 #pragma once
 
 #include <cstdint>
+#include <ostream>
 #include <string>
 #include <string_view>
 #include <vector>
 
 namespace freqlab {
 
-class ByteWriter {
+// Where a writer's bytes go; the typed puts are built on put_bytes.
+class ByteSink {
   public:
+    virtual ~ByteSink() = default;
+    virtual void put_bytes(const void* data, size_t n) = 0;
     template <class T>
     void put(const T& value) {
-        bytes_.append(reinterpret_cast<const char*>(&value), sizeof(T));
+        put_bytes(&value, sizeof(T));
     }
-    void put_bytes(const void* data, size_t n) { bytes_.append(static_cast<const char*>(data), n); }
-    void put_string(const std::string& s) {
+    void put_string(std::string_view s) {
         put<uint64_t>(s.size());
-        bytes_ += s;
+        put_bytes(s.data(), s.size());
     }
     // The size, then the elements' bytes (trivially copyable T).
     template <class T>
@@ -28,10 +31,43 @@ class ByteWriter {
         put<uint64_t>(v.size());
         put_bytes(v.data(), v.size() * sizeof(T));
     }
+};
+
+// Into a string (messages, state).
+class ByteWriter : public ByteSink {
+  public:
+    void put_bytes(const void* data, size_t n) override {
+        bytes_.append(static_cast<const char*>(data), n);
+    }
     std::string& bytes() { return bytes_; }
 
   private:
     std::string bytes_;
+};
+
+// Straight into a stream (files of tens of MB: no copy of them in memory), counting.
+class StreamByteWriter : public ByteSink {
+  public:
+    explicit StreamByteWriter(std::ostream& out) : out_(out) {}
+    void put_bytes(const void* data, size_t n) override {
+        out_.write(static_cast<const char*>(data), std::streamsize(n));
+        written_ += n;
+    }
+    uint64_t written() const { return written_; }
+
+  private:
+    std::ostream& out_;
+    uint64_t written_ = 0;
+};
+
+// Only counts (the size of what a writer would write, before writing it).
+class ByteCounter : public ByteSink {
+  public:
+    void put_bytes(const void*, size_t n) override { counted_ += n; }
+    uint64_t counted() const { return counted_; }
+
+  private:
+    uint64_t counted_ = 0;
 };
 
 class ByteReader {

@@ -12,6 +12,11 @@ constexpr uint32_t kMagic = 0x464c4c53;  // "FLLS"
 
 std::string encode_layers(const LayerSet& layers) {
     ByteWriter w;
+    encode_layers(layers, w);
+    return std::move(w.bytes());
+}
+
+void encode_layers(const LayerSet& layers, ByteSink& w) {
     w.put(kMagic);
     w.put<int32_t>(layers.width());
     w.put<int32_t>(layers.height());
@@ -29,7 +34,6 @@ std::string encode_layers(const LayerSet& layers) {
         w.put<uint64_t>(l.data.size());
         w.put_bytes(l.data.data(), l.data.size() * sizeof(float));
     }
-    return std::move(w.bytes());
 }
 
 LayerSet decode_layers(std::string_view bytes, const std::string& source) {

@@ -12,6 +12,8 @@
 namespace freqlab {
 
 std::string encode_layers(const LayerSet& layers);
+// The same bytes into any sink (a file as they are written, a counter for their size).
+void encode_layers(const LayerSet& layers, ByteSink& out);
 // Throws Error naming `source` when the bytes are not a whole encoded LayerSet.
 LayerSet decode_layers(std::string_view bytes, const std::string& source);
 
