@@ -72,6 +72,7 @@ void restart_renderer(Workbench::State& s) {
         s.shading_memo_key = memo_key;
     }
     if (s.renderer) s.renderer->set_shading_memo(s.shading_memo);
+    s.shading_memo_recalled_before = s.shading_memo->counts().recalled;
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
         s.recorded = recorded_frame_stats(s.run_dir);
@@ -402,9 +403,19 @@ void draw_timeline(Workbench::State& s) {
                   (s.job_resumed_from > 0
                        ? " (from the checkpoint before " + std::to_string(s.job_resumed_from) + ")"
                        : "");
-        ImGui::Text("rendering frame %d%s: %s %.0f%%  ETA %s", s.job_frame, way.c_str(),
+        // A cache.* change renders again what an earlier run shaded: say how much it recalls.
+        std::string memo;
+        if (s.shading_memo) {
+            const long recalled =
+                s.shading_memo->counts().recalled - s.shading_memo_recalled_before;
+            if (recalled > 0)
+                memo = "   (" + std::to_string(recalled) +
+                       " radiance points recalled from earlier runs, not shaded again)";
+        }
+        ImGui::Text("rendering frame %d%s: %s %.0f%%  ETA %s%s", s.job_frame, way.c_str(),
                     p.stage.c_str(), 100 * p.fraction,
-                    p.eta_s >= 0 ? (std::to_string(int(p.eta_s + 0.5)) + " s").c_str() : "--");
+                    p.eta_s >= 0 ? (std::to_string(int(p.eta_s + 0.5)) + " s").c_str() : "--",
+                    memo.c_str());
         ImGui::SameLine();
         if (ImGui::SmallButton("cancel")) s.job->cancel();
     } else if (s.cancelled_frame == s.frame && !s.bake) {

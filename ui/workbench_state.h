@@ -64,7 +64,8 @@ struct Workbench::State {
     // settings that shade them stay: a cache.* change re-runs the cache without shading again.
     std::shared_ptr<ShadingMemo> shading_memo;
     nlohmann::json shading_memo_key;
-    size_t shading_memo_cap = 0;  // $FREQLAB_SHADING_MEMO_MB, read when the scene opens
+    size_t shading_memo_cap = 0;            // $FREQLAB_SHADING_MEMO_MB, read when the scene opens
+    long shading_memo_recalled_before = 0;  // its count when this run started (status line)
     // A render cancelled by the user stays cancelled: no job starts for this frame again until
     // the frame or a setting changes, or the status line's "render" is pressed.
     int cancelled_frame = -1;
