@@ -90,6 +90,8 @@ class ScopedEnvironment {
         if (const char* old = std::getenv(name)) old_ = old;
         ::setenv(name, value.c_str(), 1);
     }
+    ScopedEnvironment(const ScopedEnvironment&) = delete;
+    ScopedEnvironment& operator=(const ScopedEnvironment&) = delete;
     ~ScopedEnvironment() {
         if (old_)
             ::setenv(name_, old_->c_str(), 1);
@@ -102,56 +104,72 @@ class ScopedEnvironment {
     std::optional<std::string> old_;
 };
 
+// A temporary run store for this scope: $FREQLAB_RUN_STORE_DIR points at it while `use()`'s
+// guard lives; the folder is removed at the end, also when the bench throws.
+class TemporaryRunStore {
+  public:
+    explicit TemporaryRunStore(const std::string& name)
+        : dir_(fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()))) {}
+    TemporaryRunStore(const TemporaryRunStore&) = delete;
+    TemporaryRunStore& operator=(const TemporaryRunStore&) = delete;
+    ~TemporaryRunStore() {
+        std::error_code ec;
+        fs::remove_all(dir_, ec);
+    }
+    ScopedEnvironment use() const { return {"FREQLAB_RUN_STORE_DIR", dir_.string()}; }
+
+  private:
+    fs::path dir_;
+};
+
 // Step 4 (see the top). Two workbenches on the run, each with its own temporary run store, one
 // with a shading memo and one without (FREQLAB_SHADING_MEMO_MB=0), both first render frames
 // 0..F as recorded (the memo then holds what a researcher who rendered them has: nothing is
 // read from the run store), then each trial sets another cache.q_eps_x on both, in turn.
 json cache_change_study(OsMesaHost& host, const WorkbenchOptions& wo, int trials) {
-    const fs::path store =
-        fs::temp_directory_path() / ("freqlab_scrub_bench_" + std::to_string(::getpid()));
-    std::unique_ptr<Workbench> with_memo_wb, scratch_wb;
+    struct Arm {
+        bool memo;
+        TemporaryRunStore store;
+        std::unique_ptr<Workbench> wb;
+        std::vector<double> ms;
+    };
+    Arm arms[2] = {{true, TemporaryRunStore("freqlab_scrub_memo"), nullptr, {}},
+                   {false, TemporaryRunStore("freqlab_scrub_scratch"), nullptr, {}}};
     int target = 0;
-    for (bool memo : {true, false}) {
-        ScopedEnvironment dir("FREQLAB_RUN_STORE_DIR",
-                              (store / (memo ? "memo" : "scratch")).string());
+    for (Arm& arm : arms) {
+        const ScopedEnvironment dir = arm.store.use();
         std::optional<ScopedEnvironment> cap;
-        if (!memo) cap.emplace("FREQLAB_SHADING_MEMO_MB", "0");
+        if (!arm.memo) cap.emplace("FREQLAB_SHADING_MEMO_MB", "0");
         WorkbenchOptions so = wo;
         so.frame = 0;
-        auto wb = std::make_unique<Workbench>(so);
-        until_shown(host, *wb);
-        target = std::min(60, int(wb->frame_count()) - 1);
-        wb->set_frame(target);
-        until_shown(host, *wb);
-        (memo ? with_memo_wb : scratch_wb) = std::move(wb);
+        arm.wb = std::make_unique<Workbench>(so);
+        until_shown(host, *arm.wb);
+        target = std::min(60, int(arm.wb->frame_count()) - 1);
+        arm.wb->set_frame(target);
+        until_shown(host, *arm.wb);
     }
-    std::vector<double> with_memo, from_scratch;
     json values = json::array();
     for (int t = 0; t < trials; ++t) {
         const std::string value = "cache.q_eps_x=" + std::to_string(2e-4 * (t + 1));
         values.push_back(value);
-        for (Workbench* wb : {with_memo_wb.get(), scratch_wb.get()}) {
-            const bool memo = wb == with_memo_wb.get();
-            ScopedEnvironment dir("FREQLAB_RUN_STORE_DIR",
-                                  (store / (memo ? "memo" : "scratch")).string());
+        for (Arm& arm : arms) {
+            const ScopedEnvironment dir = arm.store.use();
             const auto t0 = Clock::now();
-            wb->apply_setting(value);
-            until_shown(host, *wb);
-            (memo ? with_memo : from_scratch).push_back(ms_since(t0));
-            if (wb->frame() != target) throw Error("bench --study scrub", "", "frame moved");
+            arm.wb->apply_setting(value);
+            until_shown(host, *arm.wb);
+            arm.ms.push_back(ms_since(t0));
+            if (arm.wb->frame() != target) throw Error("bench --study scrub", "", "frame moved");
         }
         std::fprintf(stderr, "%s at frame %d: %.1f s with the memo, %.1f s from scratch\n",
-                     value.c_str(), target, with_memo.back() / 1000.0,
-                     from_scratch.back() / 1000.0);
+                     value.c_str(), target, arms[0].ms.back() / 1000.0, arms[1].ms.back() / 1000.0);
     }
-    with_memo_wb.reset();
-    scratch_wb.reset();
-    std::error_code ec;
-    fs::remove_all(store, ec);
-    const double a = percentile(with_memo, 0.5), b = percentile(from_scratch, 0.5);
-    return {{"frame", target},           {"values", values},
-            {"with_memo_ms", with_memo}, {"from_scratch_ms", from_scratch},
-            {"with_memo_median_ms", a},  {"from_scratch_median_ms", b},
+    const double a = percentile(arms[0].ms, 0.5), b = percentile(arms[1].ms, 0.5);
+    return {{"frame", target},
+            {"values", values},
+            {"with_memo_ms", arms[0].ms},
+            {"from_scratch_ms", arms[1].ms},
+            {"with_memo_median_ms", a},
+            {"from_scratch_median_ms", b},
             {"ratio_of_medians", a / b}};
 }
 
@@ -235,9 +253,8 @@ int run_scrub_bench(const ScrubBenchOptions& o) {
     until_shown(host, wb);
     std::vector<double> first, full;
     // Their frames go to a temporary run store: a second bench would find them recorded.
-    const fs::path new_store =
-        fs::temp_directory_path() / ("freqlab_scrub_new_" + std::to_string(::getpid()));
-    ScopedEnvironment new_dir("FREQLAB_RUN_STORE_DIR", new_store.string());
+    const TemporaryRunStore new_store("freqlab_scrub_new");
+    const ScopedEnvironment new_dir = new_store.use();
     for (int k = 0; k < 5; ++k) {
         const auto t0 = Clock::now();
         wb.apply_setting("cache.q_eps_x=" + std::to_string(2e-4 + 1e-5 * k));
@@ -251,8 +268,6 @@ int run_scrub_bench(const ScrubBenchOptions& o) {
         first.push_back(first_ms);
         full.push_back(ms_since(t0));
     }
-    std::error_code ec;
-    fs::remove_all(new_store, ec);
     report["new_frame"] = {{"first_image_ms", first},
                            {"frame_ms", full},
                            {"first_image_median_ms", percentile(first, 0.5)},

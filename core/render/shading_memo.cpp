@@ -40,9 +40,7 @@ size_t ShadingMemo::FrameTable::bytes() const {
     return keys.capacity() * sizeof(uint64_t) + entries.capacity() * sizeof(Entry);
 }
 
-ShadingMemo::ShadingMemo(size_t max_bytes) : max_bytes_(max_bytes) {
-    counts_.max_bytes = max_bytes;
-}
+ShadingMemo::ShadingMemo(size_t max_bytes) : max_bytes_(max_bytes) {}
 
 size_t ShadingMemo::default_max_bytes() {
     return megabytes_from_environment("FREQLAB_SHADING_MEMO_MB", 512);
@@ -118,6 +116,7 @@ ShadingMemo::Counts ShadingMemo::counts() const {
     Counts c = counts_;
     c.frames = long(frames_.size());
     c.bytes = bytes_;
+    c.max_bytes = max_bytes_;
     return c;
 }
 

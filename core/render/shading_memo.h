@@ -79,7 +79,7 @@ class ShadingMemo {
     size_t max_bytes_ = 0;
     std::map<int, std::shared_ptr<const FrameTable>> frames_;
     size_t bytes_ = 0;
-    Counts counts_;
+    Counts counts_;  // recalled, stored, evicted_frames (the rest is filled in by counts())
 };
 
 }  // namespace freqlab
