@@ -5,12 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <thread>
 
 #include "base/error.h"
 #include "base/file_io.h"
+#include "render/background_frame_reader.h"
 #include "render/frame_checkpoint.h"
 #include "render/frame_store.h"
 
@@ -127,6 +129,77 @@ TEST(RecordedFrames, ReadBackIsTheFrameWrittenBitForBit) {
     const auto stats = recorded_frame_stats(dir);
     ASSERT_EQ(stats.size(), 1u);
     EXPECT_EQ(stats.at(3), f.stats);
+    fs::remove_all(dir);
+}
+
+// A timeline jump reads the layers on screen first (~5 % of a frame), the rest later.
+TEST(RecordedFrames, OnlyTheLayersAskedForAreReadAndTheOthersNamed) {
+    const fs::path dir = fresh_dir("partial");
+    const FrameResult f = test_frame(3);
+    write_recorded_frame(dir, run_key("cache"), f);
+    const FrameResult part = read_recorded_frame(dir, run_key("cache"), 3, {"samples", "nope"});
+    EXPECT_TRUE(part.partial);
+    EXPECT_EQ(part.unread_layers, (std::vector<std::string>{"color", "decision"}));
+    ASSERT_EQ(part.layers.layers().size(), 1u);
+    const Layer& s = part.layers.get("samples");
+    EXPECT_TRUE(s.sparse);
+    EXPECT_EQ(std::memcmp(s.data.data(), f.layers.get("samples").data.data(),
+                          s.data.size() * sizeof(float)),
+              0);
+    EXPECT_EQ(part.stats, f.stats);
+    EXPECT_EQ(part.time_s, f.time_s);
+    EXPECT_FALSE(part.cache_records);
+    EXPECT_FALSE(part.sample_positions);
+    EXPECT_FALSE(read_recorded_frame(dir, run_key("cache"), 3).partial);
+    // A layer left out is still checked: a damaged kind is refused naming it either way.
+    std::string bytes = read_text_file(recorded_frame_path(dir, 3));
+    const size_t at = bytes.find("decision");
+    ASSERT_NE(at, std::string::npos);
+    const int32_t bad_kind = 99;
+    std::memcpy(&bytes[at + 8], &bad_kind, sizeof bad_kind);
+    write_text_atomically(recorded_frame_path(dir, 3), bytes);
+    EXPECT_EQ(field_of([&] { read_recorded_frame(dir, run_key("cache"), 3, {"color"}); }),
+              "layers.decision");
+    EXPECT_EQ(field_of([&] { read_recorded_frame(dir, run_key("cache"), 3); }), "layers.decision");
+    fs::remove_all(dir);
+}
+
+// The whole frame after the jump: read on the reader's thread, the same bytes as a read here;
+// a frame gone from the store comes back as an error naming its file.
+TEST(RecordedFrames, BackgroundReaderReadsWholeFramesAndNamesMissingOnes) {
+    const fs::path dir = fresh_dir("background");
+    for (int frame : {1, 2}) write_recorded_frame(dir, run_key("cache"), test_frame(frame));
+    BackgroundFrameReader reader;
+    EXPECT_TRUE(reader.idle());
+    std::vector<BackgroundFrameReader::Read> reads;
+    auto wait_for = [&](int frame) {
+        for (int i = 0; i < 1000; ++i) {
+            for (auto& r : reader.take()) reads.push_back(std::move(r));
+            if (!reads.empty() && reads.back().frame == frame) return;
+            reader.wait_until_idle_or_done();
+        }
+        FAIL() << "frame " << frame << " never read";
+    };
+    reader.request(dir, run_key("cache"), 1);
+    reader.request(dir, run_key("cache"), 2);  // replaces 1 unless 1 is being read
+    wait_for(2);
+    const BackgroundFrameReader::Read& two = reads.back();
+    ASSERT_TRUE(two.result) << two.error;
+    EXPECT_EQ(two.dir, dir);
+    EXPECT_FALSE(two.result->partial);
+    const FrameResult here = read_recorded_frame(dir, run_key("cache"), 2);
+    ASSERT_EQ(two.result->layers.layers().size(), here.layers.layers().size());
+    for (size_t i = 0; i < here.layers.layers().size(); ++i)
+        EXPECT_EQ(two.result->layers.layers()[i].data, here.layers.layers()[i].data);
+    ASSERT_TRUE(two.result->cache_records);
+    EXPECT_EQ(two.result->cache_records->size(), here.cache_records->size());
+    EXPECT_LE(reads.size(), 2u);
+    reads.clear();
+    reader.request(dir, run_key("cache"), 9);
+    wait_for(9);
+    EXPECT_FALSE(reads.back().result);
+    EXPECT_NE(reads.back().error.find("frame_0009.bin"), std::string::npos) << reads.back().error;
+    EXPECT_TRUE(reader.idle());
     fs::remove_all(dir);
 }
 

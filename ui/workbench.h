@@ -76,6 +76,9 @@ class Workbench {
     bool set_layer(const std::string& name);
     void apply_setting(const std::string& assignment);  // "prefix.key=value"; re-renders as needed
     bool frame_shown() const;                           // the current frame's result is on screen
+    // ... and every layer of it is in memory (a frame read back from the run store shows its
+    // layers on screen first, the rest follows from a background read).
+    bool frame_complete() const;
     bool first_image_shown() const;  // the current frame's first image (it still renders)
     // Something on screen changes without input: a job runs, playback, a frame not shown yet.
     bool busy() const;

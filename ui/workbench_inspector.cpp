@@ -92,7 +92,8 @@ void update_trace(Workbench::State& s) {
         }
         return;
     }
-    if (s.shown->preview) {  // no estimate of its own to trace yet
+    if (s.shown->partial) return;  // its records are on their way (recorded_result)
+    if (s.shown->preview) {        // no estimate of its own to trace yet
         s.trace_lines = {"(the frame's first image: its trace comes with the rendered frame)"};
         s.trace_point.reset();
         s.trace_pixel = {-1, -1};

@@ -17,6 +17,7 @@
 #include "image/figure.h"
 #include "image/metrics.h"
 #include "layer_view.h"
+#include "render/background_frame_reader.h"
 #include "render/frame_renderer.h"
 #include "render/frame_store.h"
 #include "scene/json_reader.h"
@@ -78,6 +79,8 @@ struct Workbench::State {
     std::string store_failure;  // why the last frame could not be kept on disk (shown)
     // The first image of the frame the job renders (render/sparse_pass.h), until it is kept.
     std::shared_ptr<FrameResult> preview;
+    // Whole frames read after a jump showed their on-screen layers (recorded_result).
+    std::unique_ptr<BackgroundFrameReader> frame_reader = std::make_unique<BackgroundFrameReader>();
 
     int frame = 0;
     bool playing = false;
@@ -174,7 +177,15 @@ void start_bake_reference(Workbench::State& s);
 void attach_reference(Workbench::State& s, int frame);
 // A frame's result: decoded in memory, else read from the run store (results_mutex held; null
 // when the frame is not recorded, or its file went: then it is no longer listed as recorded).
+// Read from the store, it holds the layers on screen only (`partial`: ~2.8 MB of a 55 MB frame
+// at 640 x 360) and the whole frame is asked of s.frame_reader, which poll_frame_reader swaps in.
 std::shared_ptr<FrameResult> recorded_result(Workbench::State& s, int frame);
+// Keeps the whole frames s.frame_reader has read; the one shown partially replaces it
+// (results_mutex held).
+void poll_frame_reader(Workbench::State& s);
+// The frame shown, whole (exports, traces, the inspector's rows need every layer): waits for or
+// reads what a jump left for later. Throws Error naming the file when it is gone or damaged.
+void complete_shown(Workbench::State& s);
 // Keeps a frame just rendered or baked (results_mutex held).
 void keep_result(Workbench::State& s, FrameResult result);
 

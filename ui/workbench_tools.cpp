@@ -124,6 +124,7 @@ nlohmann::json Workbench::export_provenance() const {
 }
 
 void Workbench::export_exr(const std::string& path) const {
+    complete_shown(*s_);
     if (!s_->shown) throw Error(path, "export", "no result is shown yet");
     write_exr(path, s_->shown->layers, ::freqlab::ui::export_provenance(*s_));
 }
@@ -262,6 +263,7 @@ std::string stats_csv(const Workbench::State& s) {
 void draw_export_menu(Workbench::State& s) {
     if (!ImGui::BeginMenu("Export")) return;
     try {
+        complete_shown(s);  // every layer, and the layer on screen when it was not read yet
         if (s.shown) {
             const LayerSet& L = s.shown->layers;
             const Layer& layer = L.get(s.layer_name);

@@ -134,16 +134,21 @@ void draw_viewport(Workbench::State& s) {
         std::min(names + ImGui::GetFrameHeight() + 2 * ImGui::GetStyle().FramePadding.x,
                  0.4f * ImGui::GetContentRegionAvail().x));
     if (ImGui::BeginCombo("layer", s.layer_name.c_str())) {
-        for (const Layer& l : L.layers())
-            if (ImGui::Selectable(l.name.c_str(), l.name == s.layer_name)) {
-                s.layer_name = l.name;
+        auto item = [&](const std::string& name) {
+            if (ImGui::Selectable(name.c_str(), name == s.layer_name)) {
+                s.layer_name = name;
                 s.view_dirty = true;
             }
+        };
+        for (const Layer& l : L.layers()) item(l.name);
+        for (const std::string& name : s.shown->unread_layers) item(name);  // on their way
         ImGui::EndCombo();
     }
     const Layer* layer = L.find(s.layer_name);
-    if (!layer && s.shown->preview) {
-        layer = &L.get("color");  // a first image has only its colour: the choice stays
+    if (!layer && (s.shown->preview || s.shown->partial)) {
+        // A first image has only its colour, a frame just read back only its layers on screen
+        // until the rest is read: the choice stays.
+        layer = &L.get("color");
     } else if (!layer) {
         s.layer_name = "color";
         layer = &L.get("color");

@@ -15,6 +15,14 @@ void ByteReader::get_bytes(void* out, size_t n) {
     at_ += n;
 }
 
+void ByteReader::skip(size_t n) {
+    if (n > remaining())
+        throw Error(source_, field_,
+                    "truncated message: " + std::to_string(n) + " bytes to skip at offset " +
+                        std::to_string(at_) + ", " + std::to_string(remaining()) + " left");
+    at_ += n;
+}
+
 void ByteReader::check_left(uint64_t count, size_t size) const {
     if (size > 0 && count > remaining() / size)
         throw Error(source_, field_,

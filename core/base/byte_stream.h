@@ -93,6 +93,7 @@ class ByteReader {
         get_bytes(v.data(), size_t(n) * sizeof(T));
         return v;
     }
+    void skip(size_t n);  // throws Error when fewer than n bytes are left
     size_t remaining() const { return bytes_.size() - at_; }
 
   private:

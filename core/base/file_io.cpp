@@ -64,7 +64,7 @@ std::string read_text_file(const fs::path& path) {
     return text;
 }
 
-MappedFile::MappedFile(const fs::path& path) {
+MappedFile::MappedFile(const fs::path& path, MapPages pages) {
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0)
         throw Error(path.string(), "", "cannot open file (does it exist and is it readable?)");
@@ -75,7 +75,8 @@ MappedFile::MappedFile(const fs::path& path) {
     }
     size_ = size_t(st.st_size);
     if (size_ > 0) {
-        void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+        void* p = ::mmap(nullptr, size_, PROT_READ,
+                         MAP_PRIVATE | (pages == MapPages::Populate ? MAP_POPULATE : 0), fd, 0);
         if (p == MAP_FAILED) {
             const std::string why = std::strerror(errno);
             ::close(fd);

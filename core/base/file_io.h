@@ -20,10 +20,12 @@ std::string describe_write_failure(const std::filesystem::path& path, std::strin
 
 // A file's bytes, mapped read-only and populated in one call (MAP_POPULATE): a 50 MB recorded
 // frame read into a fresh string cost ~250 ms of page faults on these machines, its mapping a
-// few ms. Throws Error naming the file when it cannot be opened or mapped.
+// few ms. Throws Error naming the file when it cannot be opened or mapped. MapPages::OnTouch:
+// pages are mapped as they are touched (a read of a few parts of a large file).
+enum class MapPages { Populate, OnTouch };
 class MappedFile {
   public:
-    explicit MappedFile(const std::filesystem::path& path);
+    explicit MappedFile(const std::filesystem::path& path, MapPages pages = MapPages::Populate);
     ~MappedFile();
     MappedFile(const MappedFile&) = delete;
     MappedFile& operator=(const MappedFile&) = delete;

@@ -1,5 +1,6 @@
 #include "image/layer_codec.h"
 
+#include <algorithm>
 #include <cstring>
 
 #include "base/error.h"
@@ -36,7 +37,11 @@ void encode_layers(const LayerSet& layers, ByteSink& w) {
     }
 }
 
-LayerSet decode_layers(std::string_view bytes, const std::string& source) {
+namespace {
+
+// Every layer when `only` is null.
+LayerSet decode(std::string_view bytes, const std::string& source,
+                const std::vector<std::string>* only, std::vector<std::string>* left_out) {
     ByteReader r(bytes, source);
     if (r.get<uint32_t>() != kMagic) throw Error(source, "layers", "not an encoded LayerSet");
     const int width = r.get<int32_t>(), height = r.get<int32_t>();
@@ -56,7 +61,10 @@ LayerSet decode_layers(std::string_view bytes, const std::string& source) {
             throw Error(source, "layers." + name,
                         std::to_string(width) + " x " + std::to_string(height) + " x " +
                             std::to_string(channels) + " values past the end");
-        Layer& l = set.add(name, LayerKind(kind), channels, r.get_string());
+        const bool wanted = !only || std::find(only->begin(), only->end(), name) != only->end();
+        Layer scratch;  // a layer left out is checked like the others, then dropped
+        Layer& l = wanted ? set.add(name, LayerKind(kind), channels, r.get_string()) : scratch;
+        if (!wanted) r.get_view();  // its description
         const uint32_t entries = r.get<uint32_t>();
         if (entries > r.remaining() / sizeof(uint64_t))  // each at least its length
             throw Error(source, "layers." + name,
@@ -74,11 +82,28 @@ LayerSet decode_layers(std::string_view bytes, const std::string& source) {
             throw Error(source, "layers." + name,
                         "expected " + std::to_string(set.pixel_count() * size_t(channels)) +
                             " values, got " + std::to_string(values));
-        r.get_bytes(l.data.data(), size_t(values) * sizeof(float));
+        if (wanted) {
+            r.get_bytes(l.data.data(), size_t(values) * sizeof(float));
+        } else {
+            r.skip(size_t(values) * sizeof(float));
+            left_out->push_back(name);
+        }
     }
     if (r.remaining() != 0)
         throw Error(source, "layers", std::to_string(r.remaining()) + " bytes past the end");
     return set;
+}
+
+}  // namespace
+
+LayerSet decode_layers(std::string_view bytes, const std::string& source) {
+    return decode(bytes, source, nullptr, nullptr);
+}
+
+LayerSet decode_layers(std::string_view bytes, const std::string& source,
+                       const std::vector<std::string>& only, std::vector<std::string>& left_out) {
+    left_out.clear();
+    return decode(bytes, source, &only, &left_out);
 }
 
 }  // namespace freqlab

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "base/byte_stream.h"
 #include "image/layers.h"
@@ -16,5 +17,9 @@ std::string encode_layers(const LayerSet& layers);
 void encode_layers(const LayerSet& layers, ByteSink& out);
 // Throws Error naming `source` when the bytes are not a whole encoded LayerSet.
 LayerSet decode_layers(std::string_view bytes, const std::string& source);
+// Only the layers named in `only` (every layer's header is still checked); the names of the
+// others, in their order, go to `left_out`. A frame's on-screen layer is ~5 % of its bytes.
+LayerSet decode_layers(std::string_view bytes, const std::string& source,
+                       const std::vector<std::string>& only, std::vector<std::string>& left_out);
 
 }  // namespace freqlab

@@ -68,6 +68,10 @@ struct FrameResult {
     std::shared_ptr<const std::vector<std::pair<int, vec3>>> sample_positions;
     // A first image of the frame, shown while the frame renders (never recorded).
     bool preview = false;
+    // Read back with only some of its layers (render/frame_store.h: what a timeline jump shows
+    // first): the layers left out, by name; no cache records or sample positions either.
+    bool partial = false;
+    std::vector<std::string> unread_layers;
 };
 
 class FrameRenderer {

@@ -89,10 +89,14 @@ void write_recorded_frame(const fs::path& dir, const json& key, const FrameResul
     write_text_atomically(stats_path(dir, r.frame), r.stats.dump());
 }
 
-FrameResult read_recorded_frame(const fs::path& dir, const json& key, int frame) {
+namespace {
+
+// Every layer, records and positions when `only_layers` is null.
+FrameResult read_frame(const fs::path& dir, const json& key, int frame,
+                       const std::vector<std::string>* only_layers) {
     const fs::path file = recorded_frame_path(dir, frame);
     const std::string source = file.string();
-    const MappedFile mapped(file);
+    const MappedFile mapped(file, only_layers ? MapPages::OnTouch : MapPages::Populate);
     const std::string_view bytes = mapped.bytes();
     ByteReader r(bytes, source, "frame");
     const uint64_t stored =
@@ -111,12 +115,18 @@ FrameResult read_recorded_frame(const fs::path& dir, const json& key, int frame)
             source, "frame",
             "holds frame " + std::to_string(result.frame) + ", expected " + std::to_string(frame));
     result.time_s = r.get<float>();
-    result.layers = decode_layers(r.get_view(), source);
+    if (only_layers) {
+        result.layers = decode_layers(r.get_view(), source, *only_layers, result.unread_layers);
+        result.partial = true;
+    } else {
+        result.layers = decode_layers(r.get_view(), source);
+    }
     try {
         result.stats = json::parse(r.get_string());
     } catch (const json::exception& e) {
         throw Error(source, "stats", std::string("unreadable: ") + e.what());
     }
+    if (only_layers) return result;  // the file's size was checked: the rest is there
     if (r.get<uint8_t>()) {
         auto records = std::make_shared<std::vector<CacheRecord>>(r.get_vector<CacheRecord>());
         check_records(*records, source);
@@ -129,6 +139,17 @@ FrameResult read_recorded_frame(const fs::path& dir, const json& key, int frame)
         throw Error(source, "frame",
                     std::to_string(r.remaining() - sizeof(uint64_t)) + " bytes past the end");
     return result;
+}
+
+}  // namespace
+
+FrameResult read_recorded_frame(const fs::path& dir, const json& key, int frame) {
+    return read_frame(dir, key, frame, nullptr);
+}
+
+FrameResult read_recorded_frame(const fs::path& dir, const json& key, int frame,
+                                const std::vector<std::string>& only_layers) {
+    return read_frame(dir, key, frame, &only_layers);
 }
 
 std::map<int, json> recorded_frame_stats(const fs::path& dir) {

@@ -774,6 +774,54 @@ TEST(GlWorkbench, JumpsResumeFromTheRunsCheckpointsWithTheSameBytes) {
     fs::remove_all(store);
 }
 
+// A jump to a recorded frame shows the layers on screen first (a read of ~5 % of the frame: issue
+// "The timeline as a recorded run", acceptance 1) and the rest a UI frame or more later, read in
+// the background; whoever needs every layer at once (exports, the inspector, tests) waits for
+// it. Both are the recorded bytes.
+TEST(GlWorkbench, ARecordedFrameShowsItsLayerFirstAndTheRestFollows) {
+    const fs::path store = fs::temp_directory_path() / "freqlab_gl_partial_store";
+    fs::remove_all(store);
+    const std::string previous = std::getenv("FREQLAB_RUN_STORE_DIR");
+    setenv("FREQLAB_RUN_STORE_DIR", store.c_str(), 1);
+    GlSession gl;
+    WorkbenchOptions o = small_scene("object");
+    o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/rotor.json";
+    o.method = "cache";
+    std::map<int, LayerSet> first;
+    {
+        Workbench wb(o);
+        for (int f = 0; f <= 2; ++f) {
+            wb.set_frame(f);
+            run_until_shown(gl, wb);
+            first[f] = *wb.layers();
+        }
+    }
+    auto same = [&](const LayerSet& got, int frame) {
+        ASSERT_EQ(got.names(), first[frame].names());
+        for (const Layer& l : first[frame].layers())
+            EXPECT_EQ(got.get(l.name).data, l.data) << l.name << " of frame " << frame;
+    };
+    auto until_shown = [&](Workbench& wb) {  // no UI frame after it: that one may complete it
+        for (int i = 0; i < 400 && !wb.frame_shown(); ++i) render_ui_frame(*gl.host, wb);
+        ASSERT_TRUE(wb.frame_shown()) << wb.error();
+    };
+    Workbench wb(o);  // the run opened again: its frames come from the run store
+    until_shown(wb);
+    wb.set_frame(2);
+    until_shown(wb);
+    EXPECT_FALSE(wb.frame_complete()) << "the jump read the layer on screen only";
+    for (int i = 0; i < 400 && !wb.frame_complete(); ++i) render_ui_frame(*gl.host, wb);
+    EXPECT_TRUE(wb.frame_complete());
+    same(*wb.layers(), 2);
+    wb.set_frame(1);
+    until_shown(wb);
+    EXPECT_FALSE(wb.frame_complete());
+    same(*wb.layers(), 1);  // asked at once: waits for the rest
+    EXPECT_TRUE(wb.frame_complete());
+    setenv("FREQLAB_RUN_STORE_DIR", previous.c_str(), 1);
+    fs::remove_all(store);
+}
+
 // A/B of two recorded runs (issue "The timeline as a recorded run"): the run kept as A, a
 // setting changed, the frame B shows gains A's recorded colour bit for bit (layer run_a), its
 // error layers and metrics against it; forgetting A drops the comparison.
