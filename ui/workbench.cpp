@@ -45,6 +45,7 @@ void restart_renderer(Workbench::State& s) {
         s.recorded.clear();
         s.store_failure.clear();
         s.preview.reset();
+        s.last_stage_times.clear();
     }
     s.shown = nullptr;
     s.shown_frame = -1;
@@ -166,6 +167,20 @@ void toggle_decision_overlay(Workbench::State& s) {
     s.view_dirty = true;
 }
 
+// Time left until the frame asked for is shown: the frame rendering now (its job's ETA, planned
+// from the last frame's stages) and, for a stateful method on its way, the frames after it at
+// the last frame's time. -1 while unknown.
+double way_eta_seconds(const Workbench::State& s, const ProgressSnapshot& p) {
+    if (p.eta_s < 0) return -1.0;
+    const int after = s.config.needs_previous_frames() ? s.frame - s.job_frame : 0;
+    if (after <= 0) return p.eta_s;
+    std::lock_guard<std::mutex> lock(s.results_mutex);
+    if (s.last_stage_times.empty()) return -1.0;
+    double frame_s = 0.0;
+    for (const StageTime& t : s.last_stage_times) frame_s += t.seconds;
+    return p.eta_s + after * frame_s;
+}
+
 void start_job_if_needed(Workbench::State& s) {
     if (s.job && !s.job->done()) return;
     if (s.job) {
@@ -209,8 +224,14 @@ void start_job_if_needed(Workbench::State& s) {
     Workbench::State* sp = &s;
     const fs::path restore_file = restore > 0 ? frame_checkpoint_path(s.run_dir, restore) : "";
     const int every = stateful ? s.config.cache.checkpoint_every : 0;
-    s.job = std::make_unique<Job>([sp, frame, restore_file, every](Progress& progress) {
+    std::vector<StageTime> plan;
+    {
+        std::lock_guard<std::mutex> lock(s.results_mutex);
+        plan = s.last_stage_times;
+    }
+    s.job = std::make_unique<Job>([sp, frame, restore_file, every, plan](Progress& progress) {
         progress.set_stage_count(sp->config.method == RenderMethod::GBuffer ? 1 : 2);
+        progress.set_expected_stages(plan);
         if (!restore_file.empty())
             sp->renderer->restore_state(read_frame_checkpoint(restore_file, sp->run_key).state,
                                         restore_file.string());
@@ -246,6 +267,7 @@ void start_job_if_needed(Workbench::State& s) {
         }
         std::lock_guard<std::mutex> lock(sp->results_mutex);
         sp->store_failure = failure;
+        sp->last_stage_times = progress.stage_times();
         keep_result(*sp, std::move(r));
     });
 }
@@ -450,9 +472,10 @@ void draw_timeline(Workbench::State& s) {
                 memo = "   (" + std::to_string(recalled) +
                        " radiance points recalled from earlier runs, not shaded again)";
         }
+        const double eta = way_eta_seconds(s, p);
         ImGui::Text("rendering frame %d%s: %s %.0f%%  ETA %s%s", s.job_frame, way.c_str(),
                     p.stage.c_str(), 100 * p.fraction,
-                    p.eta_s >= 0 ? (std::to_string(int(p.eta_s + 0.5)) + " s").c_str() : "--",
+                    eta >= 0 ? (std::to_string(int(eta + 0.5)) + " s").c_str() : "--",
                     memo.c_str());
         ImGui::SameLine();
         if (ImGui::SmallButton("cancel")) s.job->cancel();

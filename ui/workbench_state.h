@@ -77,6 +77,9 @@ struct Workbench::State {
     DecodedFrames results{0};
     std::map<int, nlohmann::json> recorded;
     std::string store_failure;  // why the last frame could not be kept on disk (shown)
+    // The stages of the last frame the job rendered, and how long each took: the next frame's
+    // progress plan (base/job.h: fractions by time, an ETA that only falls).
+    std::vector<StageTime> last_stage_times;
     // The first image of the frame the job renders (render/sparse_pass.h), until it is kept.
     std::shared_ptr<FrameResult> preview;
     // Whole frames read after a jump showed their on-screen layers (recorded_result).

@@ -9,7 +9,34 @@
 
 namespace freqlab {
 
-Progress::Progress() : start_(std::chrono::steady_clock::now()) {}
+Progress::Progress() : Progress([] { return Clock::now(); }) {}
+
+Progress::Progress(std::function<Clock::time_point()> clock)
+    : clock_(std::move(clock)), start_(clock_()) {}
+
+void Progress::set_expected_stages(std::vector<StageTime> plan) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    plan_ = std::move(plan);
+}
+
+std::vector<StageTime> Progress::stage_times() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::vector<StageTime> times;
+    const Clock::time_point now = clock_();
+    for (size_t i = 0; i < begun_.size(); ++i) {
+        const Clock::time_point end = i + 1 < begun_.size() ? begun_[i + 1].second : now;
+        times.push_back(
+            {begun_[i].first, std::chrono::duration<double>(end - begun_[i].second).count()});
+    }
+    return times;
+}
+
+double Progress::planned_seconds(size_t stage) const {
+    if (stage < plan_.size()) return plan_[stage].seconds;
+    double sum = 0.0;
+    for (const StageTime& t : plan_) sum += t.seconds;
+    return plan_.empty() ? 0.0 : sum / double(plan_.size());
+}
 
 void Progress::set_stage_count(int n) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -22,6 +49,7 @@ void Progress::begin_stage(const std::string& name, long units) {
     stage_index_ = std::min(stage_index_ + 1, stages_total_ - 1);
     units_total_ = std::max(1L, units);
     units_done_.store(0);
+    begun_.emplace_back(name, clock_());
 }
 
 void Progress::advance(long units) {
@@ -55,8 +83,29 @@ ProgressSnapshot Progress::snapshot() const {
     const double within = std::clamp(double(units_done_.load()) / double(units_total_), 0.0, 1.0);
     const int index = std::max(stage_index_, 0);
     s.fraction = done_ ? 1.0 : (index + within) / stages_total_;
-    s.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const Clock::time_point now = clock_();
+    s.elapsed_s = std::chrono::duration<double>(now - start_).count();
     s.eta_s = s.fraction > 0.01 ? s.elapsed_s * (1.0 - s.fraction) / s.fraction : -1.0;
+    if (!plan_.empty() && !done_) {
+        // Stages by position in the plan (a frame's stages come in the same order).
+        const size_t current = begun_.empty() ? 0 : begun_.size() - 1;
+        const size_t stages = std::max(plan_.size(), begun_.size());
+        double total = 0.0, before = 0.0, later = 0.0;
+        for (size_t i = 0; i < stages; ++i) {
+            const double t = planned_seconds(i);
+            total += t;
+            if (i < current) before += t;
+            if (i > current) later += t;
+        }
+        const double expected = planned_seconds(current);
+        double left = expected;
+        if (!begun_.empty()) {
+            const double spent = std::chrono::duration<double>(now - begun_.back().second).count();
+            left = std::min(expected * (1.0 - within), std::max(0.0, expected - spent));
+        }
+        s.eta_s = later + left;
+        s.fraction = total > 0.0 ? std::clamp((before + expected - left) / total, 0.0, 1.0) : 0.0;
+    }
     s.done = done_;
     s.cancelled = cancelled_;
     s.error = error_;

@@ -10,6 +10,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace freqlab {
 
@@ -31,12 +32,28 @@ void request_process_cancel();
 bool process_cancel_requested();
 void process_checkpoint();  // throws Cancelled once request_process_cancel() was called
 
+// How long a stage took (Progress::stage_times), or is expected to take (set_expected_stages).
+struct StageTime {
+    std::string name;
+    double seconds = 0.0;
+};
+
 class Progress {
   public:
+    using Clock = std::chrono::steady_clock;
     Progress();
+    explicit Progress(std::function<Clock::time_point()> clock);  // tests: a clock of their own
     // Starts a named stage; `units` is how many advance() calls complete it. Fractions of the
     // whole job are the mean over `stages_total` stages declared with set_stage_count().
     void set_stage_count(int n);
+    // The stages a job like this one took (the workbench's previous frame): fractions weigh
+    // each stage by its time, and the ETA is the plan's time left, which only falls: within a
+    // stage the smaller of its time left by units done and by time spent (a stage of one unit
+    // still counts down; one running over its time waits at 0 instead of growing), at a stage's
+    // start what the stage before had left drops out. A stage not in the plan weighs the plan's
+    // mean. Without a plan: stages weigh the same and ETA = elapsed (1 - f) / f.
+    void set_expected_stages(std::vector<StageTime> plan);
+    std::vector<StageTime> stage_times() const;  // the stages so far, the current one until now
     void begin_stage(const std::string& name, long units);
     void advance(long units = 1);
     void checkpoint() const;  // throws Cancelled when cancel() was requested
@@ -46,16 +63,20 @@ class Progress {
     void finish(const std::string& error, bool cancelled);
 
   private:
+    double planned_seconds(size_t stage) const;  // mutex_ held
+    std::function<Clock::time_point()> clock_;
     mutable std::mutex mutex_;
     std::string stage_;
     int stages_total_ = 1;
     int stage_index_ = -1;
+    std::vector<StageTime> plan_;
+    std::vector<std::pair<std::string, Clock::time_point>> begun_;  // every stage's start
     std::atomic<long> units_done_{0};
     long units_total_ = 1;
     std::atomic<bool> cancel_{false};
     bool done_ = false, cancelled_ = false;
     std::string error_;
-    std::chrono::steady_clock::time_point start_;
+    Clock::time_point start_;
 };
 
 // A job running its body on a background thread (the GUI's route). The CLI runs bodies
