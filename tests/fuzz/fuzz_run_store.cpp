@@ -1,7 +1,8 @@
 // libFuzzer target (issue "The timeline as a recorded run"): what the workbench reads back from
 // its run store. The first byte picks the reader: even, a recorded frame file
 // (render/frame_store.h: header, run key, layers, stats, cache records, positions, size);
-// odd, method A's cache state as a checkpoint holds it (RadianceCache::decode, whose bytes are
+// bit 1 set, its on-screen layer first (read_recorded_frame with only "color"); odd, method
+// A's cache state as a checkpoint holds it (RadianceCache::decode, whose bytes are
 // re-encoded identically when accepted). Bad input must end in freqlab::Error.
 #include <filesystem>
 
@@ -29,6 +30,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             std::filesystem::create_directories(dir / "frames");
             std::ofstream(freqlab::recorded_frame_path(dir, 3), std::ios::binary | std::ios::trunc)
                 .write(rest.data(), std::streamsize(rest.size()));
+            // A timeline jump reads the layer on screen alone first (bit 1 of the first byte):
+            // its layers' headers are checked the same; what it holds is what the whole read has.
+            if (data[0] & 2) {
+                const freqlab::FrameResult part =
+                    freqlab::read_recorded_frame(dir, fuzz_run_key(), 3, {"color"});
+                FUZZ_REQUIRE(part.frame == 3 && part.partial);
+                FUZZ_REQUIRE(part.layers.layers().size() <= 1);
+            }
             const freqlab::FrameResult r = freqlab::read_recorded_frame(dir, fuzz_run_key(), 3);
             FUZZ_REQUIRE(r.frame == 3);
         }
