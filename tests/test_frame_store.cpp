@@ -203,6 +203,32 @@ TEST(RecordedFrames, BackgroundReaderReadsWholeFramesAndNamesMissingOnes) {
     fs::remove_all(dir);
 }
 
+// A display setting re-renders nothing (issue "The timeline as a recorded run"): the run key
+// leaves out every setting whose flags are nothing or display only, so a run reopened at
+// another exposure (or checkpoint period) finds its frames; any other setting is another run.
+TEST(RecordedFrames, RunKeyLeavesOutSettingsThatChangeNoResult) {
+    RenderConfig config;
+    auto key = [&] {
+        return frame_checkpoint_key({{"freqlab", "test"},
+                                     {"scene_hash", "abc"},
+                                     {"scene", "/some/path.json"},
+                                     {"method", "cache"},
+                                     {"settings", config.settings_group().to_json()},
+                                     {"seed", 0}});
+    };
+    const json base = key();
+    EXPECT_FALSE(base.contains("scene"));
+    EXPECT_FALSE(base["settings"]["frame"].contains("exposure"));
+    EXPECT_FALSE(base["settings"]["cache"].contains("checkpoint_every"));
+    EXPECT_TRUE(base["settings"]["cache"].contains("q_eps_x"));
+    config.frame.exposure = 3.0f;
+    config.cache.checkpoint_every = 7;
+    config.reference.use_cache = !config.reference.use_cache;
+    EXPECT_EQ(key(), base);
+    config.cache.q_eps_x *= 2.0f;
+    EXPECT_NE(key(), base);
+}
+
 TEST(RecordedFrames, AnotherRunsOrADamagedFileIsRefusedNamingTheField) {
     const fs::path dir = fresh_dir("damage");
     write_recorded_frame(dir, run_key("cache"), test_frame(1));

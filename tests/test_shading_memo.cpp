@@ -5,6 +5,7 @@
 // refuses a point shaded with another plan; the memo keeps under its cap.
 #include <gtest/gtest.h>
 
+#include "render/frame_checkpoint.h"
 #include "render/frame_renderer.h"
 #include "render/shading_memo.h"
 #include "scene/scene_loader.h"
@@ -140,15 +141,20 @@ TEST(ShadingMemo, KeepsUnderItsCapDroppingTheLatestFrames) {
     EXPECT_EQ(none.frame(0), nullptr);
 }
 
-TEST(ShadingMemo, ItsKeyIsTheRunKeyWithoutTheCacheSettingsAndTheExposure) {
-    const nlohmann::json run = {
-        {"scene_hash", "abc"},
-        {"settings",
-         {{"cache", {{"q_eps_x", 1e-4}}}, {"frame", {{"exposure", 1.0}, {"width", 640}}}}}};
-    nlohmann::json other = run;
-    other["settings"]["cache"]["q_eps_x"] = 2e-4;
-    other["settings"]["frame"]["exposure"] = 2.0;
-    EXPECT_EQ(ShadingMemo::key_of(run), ShadingMemo::key_of(other));
-    other["settings"]["frame"]["width"] = 320;
-    EXPECT_NE(ShadingMemo::key_of(run), ShadingMemo::key_of(other));
+TEST(ShadingMemo, ItsKeyIsTheRunKeyWithoutTheCacheSettings) {
+    RenderConfig config;
+    auto run_key = [&] {
+        return frame_checkpoint_key({{"freqlab", "test"},
+                                     {"scene_hash", "abc"},
+                                     {"method", "cache"},
+                                     {"settings", config.settings_group().to_json()},
+                                     {"seed", 0}});
+    };
+    const nlohmann::json run = run_key();
+    config.cache.q_eps_x = 2e-4f;
+    config.frame.exposure = 2.0f;
+    EXPECT_EQ(ShadingMemo::key_of(run), ShadingMemo::key_of(run_key()));
+    EXPECT_NE(run, run_key());
+    config.frame.width = 320;
+    EXPECT_NE(ShadingMemo::key_of(run), ShadingMemo::key_of(run_key()));
 }

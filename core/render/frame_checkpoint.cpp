@@ -11,6 +11,7 @@
 #include "base/error.h"
 #include "base/file_io.h"
 #include "base/hash.h"
+#include "render/frame_renderer.h"
 
 namespace freqlab {
 
@@ -32,9 +33,12 @@ json frame_checkpoint_key(const json& provenance) {
     json key = json::object();
     for (const char* field : kKeyFields)
         if (provenance.contains(field)) key[field] = provenance[field];
-    // How often checkpoints are written does not change the state they hold.
-    if (key.contains("settings") && key["settings"].contains("cache"))
-        key["settings"]["cache"].erase("checkpoint_every");
+    // Settings that change no result (how often checkpoints are written, the exposure, ...)
+    // do not make another run.
+    if (key.contains("settings") && key["settings"].is_object()) {
+        RenderConfig config;
+        key["settings"] = config.settings_group().affecting_results(key["settings"]);
+    }
     return key;
 }
 

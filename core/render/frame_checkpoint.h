@@ -30,7 +30,9 @@ constexpr uint32_t kFrameCheckpointVersion = 1;
 std::filesystem::path frame_checkpoint_path(const std::filesystem::path& dir, int frame);
 
 // The key of a run from its provenance record (scene/provenance.h): the fields a resumed state
-// depends on (freqlab, scene_hash, method, settings, seed; not the scene's path).
+// depends on (freqlab, scene_hash, method, settings, seed; not the scene's path), without the
+// settings that change no result (SettingsGroup::affecting_results: frame.exposure,
+// cache.checkpoint_every, ...).
 nlohmann::json frame_checkpoint_key(const nlohmann::json& provenance);
 
 // Throws Error naming `source` and the first key field (freqlab, scene_hash, method, settings,

@@ -48,11 +48,7 @@ size_t ShadingMemo::default_max_bytes() {
 
 nlohmann::json ShadingMemo::key_of(const nlohmann::json& run_key) {
     nlohmann::json key = run_key;
-    if (key.contains("settings") && key["settings"].is_object()) {
-        key["settings"].erase("cache");
-        if (key["settings"].contains("frame") && key["settings"]["frame"].is_object())
-            key["settings"]["frame"].erase("exposure");
-    }
+    if (key.contains("settings") && key["settings"].is_object()) key["settings"].erase("cache");
     return key;
 }
 

@@ -62,7 +62,7 @@ class ShadingMemo {
     // $FREQLAB_SHADING_MEMO_MB (default 512; 0 keeps nothing), refused when not a number.
     static size_t default_max_bytes();
     // What a memo's points depend on, from a run key (frame_checkpoint_key): the key without
-    // the cache's settings (and without the display's exposure).
+    // the cache's settings (the run key has no setting that changes no result).
     static nlohmann::json key_of(const nlohmann::json& run_key);
 
     // The frame's table (null when none); the memo may drop it meanwhile, the pointer stays.

@@ -25,6 +25,16 @@ nlohmann::json SettingsGroup::to_json() const {
     return j;
 }
 
+nlohmann::json SettingsGroup::affecting_results(nlohmann::json settings) const {
+    for (const Binding& b : bindings_) {
+        const auto group = settings.find(b.schema->prefix());
+        if (group == settings.end() || !group->is_object()) continue;
+        for (const SettingField& f : b.schema->fields())
+            if ((f.invalidates & ~uint32_t(kInvalidatesDisplay)) == 0) group->erase(f.key);
+    }
+    return settings;
+}
+
 void SettingsGroup::from_json(const nlohmann::json& j, const std::string& file,
                               const std::string& path) {
     if (!j.is_object()) throw Error(file, path, "expected an object of settings groups");
