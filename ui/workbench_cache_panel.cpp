@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <string>
+#include <vector>
 
 #include "cache/cache_decision.h"
 #include "workbench_state.h"
@@ -36,6 +38,10 @@ void draw_cache_panel(Workbench::State& s) {
                           {}});
     series.push_back({"merged", decision_colour(CacheDecision::Merged), {}});
     for (Series& x : series) x.values.assign(size_t(frames), 0.0f);
+    std::vector<char> recorded(size_t(frames), 0);  // lines join recorded frames only
+    // The entries of the frame asked for, else of the latest recorded before it (while it
+    // renders; what a first image on screen stands on).
+    int counted = -1;
     long points = 0, bytes = 0;
     {
         std::lock_guard<std::mutex> lock(s.results_mutex);
@@ -48,7 +54,9 @@ void draw_cache_panel(Workbench::State& s) {
                 series[k].values[size_t(f)] = stats["discards"].value(
                     std::string(to_string(CacheDecision(d))).substr(8), 0.0f);
             series[k].values[size_t(f)] = stats.value("merged", 0.0f);
-            if (f == s.frame) {
+            recorded[size_t(f)] = 1;
+            if (f <= s.frame) {
+                counted = f;
                 points = stats.value("cache_points", 0L);
                 bytes = stats.value("cache_bytes", 0L);
             }
@@ -57,8 +65,13 @@ void draw_cache_panel(Workbench::State& s) {
     static bool log_scale = true;
     ImGui::Checkbox("log scale", &log_scale);
     ImGui::SameLine();
-    ImGui::Text("frame %d: %ld entries, %.1f MB (%.0f B/entry)", s.frame, points, bytes / 1e6,
-                points ? double(bytes) / double(points) : 0.0);
+    if (counted >= 0)
+        ImGui::Text(
+            "frame %d: %ld entries, %.1f MB (%.0f B/entry)%s", counted, points, bytes / 1e6,
+            points ? double(bytes) / double(points) : 0.0,
+            counted == s.frame ? "" : ("; " + std::to_string(s.frame) + " not yet").c_str());
+    else
+        ImGui::TextDisabled("frame %d: not rendered yet", s.frame);
     const ImVec2 origin = ImGui::GetCursorScreenPos();
     const float width = ImGui::GetContentRegionAvail().x,
                 height = 120.0f * ImGui::GetFontSize() / 13.0f;
@@ -83,7 +96,8 @@ void draw_cache_panel(Workbench::State& s) {
     };
     for (const Series& x : series)
         for (int f = 1; f < span; ++f)
-            if (x.values[size_t(f - 1)] > 0 || x.values[size_t(f)] > 0)
+            if (recorded[size_t(f - 1)] && recorded[size_t(f)] &&
+                (x.values[size_t(f - 1)] > 0 || x.values[size_t(f)] > 0))
                 dl->AddLine(ImVec2(map_x(f - 1), map_y(x.values[size_t(f - 1)])),
                             ImVec2(map_x(f), map_y(x.values[size_t(f)])), colour_u32(x.colour),
                             1.5f);
