@@ -15,6 +15,7 @@
 #include "render/background_frame_reader.h"
 #include "render/frame_checkpoint.h"
 #include "render/frame_store.h"
+#include "render/shading_memo_store.h"
 
 using namespace freqlab;
 namespace fs = std::filesystem;
@@ -257,9 +258,14 @@ TEST(RecordedFrames, RunStoreObeysItsCap) {
     write_recorded_frame(other, run_key("mis"), test_frame(0, 1.0));
     write_frame_checkpoint(frame_checkpoint_path(mine, 10), run_key("cache"), 10,
                            std::string(500000, 'x'));
+    ShadingMemo::FrameTable points;  // a frame's shading memo goes with the frame
+    points.entries.resize(2);
+    points.keys = {4, 8};
+    points.entries[1].pixel = 2;
     for (int f = 0; f < 8; ++f) {
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
         write_recorded_frame(mine, run_key("cache"), test_frame(f, 1.0));
+        write_memo_frame(mine, {{"memo", 1}}, f, points);
     }
     touch_recorded_frame(mine, 0);  // looked at last: stays
     setenv("FREQLAB_RUN_STORE_MB", "4.8", 1);
@@ -276,8 +282,11 @@ TEST(RecordedFrames, RunStoreObeysItsCap) {
     EXPECT_TRUE(kept.count(0)) << "the frame used last was dropped";
     EXPECT_TRUE(kept.count(7)) << "the newest frame was dropped";
     EXPECT_FALSE(kept.count(1)) << "the least recently used frame was kept";
-    for (int f = 0; f < 8; ++f)
+    for (int f = 0; f < 8; ++f) {
         EXPECT_EQ(fs::exists(recorded_frame_path(mine, f)), kept.count(f) > 0) << f;
+        EXPECT_EQ(fs::exists(memo_frame_path(mine, f)), kept.count(f) > 0) << f;
+    }
+    EXPECT_EQ(recorded_frame_stats(mine).size(), kept.size()) << "memo/key.json is no frame";
     fs::remove_all(store.parent_path());
 }
 

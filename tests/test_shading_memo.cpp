@@ -5,9 +5,15 @@
 // refuses a point shaded with another plan; the memo keeps under its cap.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
+#include "base/error.h"
+#include "base/file_io.h"
+
 #include "render/frame_checkpoint.h"
 #include "render/frame_renderer.h"
 #include "render/shading_memo.h"
+#include "render/shading_memo_store.h"
 #include "scene/scene_loader.h"
 
 using namespace freqlab;
@@ -63,6 +69,15 @@ void expect_memo_run_matches_scratch(bool spinning, long* recalled, long* shaded
         *shaded += m["shaded"].get<long>();
         EXPECT_FALSE(scratch[size_t(f)].stats.contains("shading_memo"));
     }
+}
+
+std::string field_of_memo(const std::filesystem::path& file, const nlohmann::json& key, int frame) {
+    try {
+        read_memo_frame(file, key, frame);
+    } catch (const Error& e) {
+        return e.field();
+    }
+    return "(accepted)";
 }
 
 }  // namespace
@@ -157,4 +172,58 @@ TEST(ShadingMemo, ItsKeyIsTheRunKeyWithoutTheCacheSettings) {
     EXPECT_NE(run, run_key());
     config.frame.width = 320;
     EXPECT_NE(ShadingMemo::key_of(run), ShadingMemo::key_of(run_key()));
+}
+
+// The memo on disk (render/shading_memo_store.h): a run reopened in a later session (a new memo,
+// fed by the files the first run wrote) renders another q_eps_x with the bytes of a run from
+// scratch, recalling the first run's points; a damaged or foreign file is refused naming the
+// field, and the loader skips it (those points are shaded again).
+TEST(ShadingMemo, PointsWrittenToTheRunStoreFeedALaterSession) {
+    const Scene scene = rotor(true);
+    const int frames = 3;
+    const std::filesystem::path store =
+        std::filesystem::temp_directory_path() / "freqlab_memo_store_test";
+    std::filesystem::remove_all(store);
+    const std::filesystem::path run_a = store / "a", run_b = store / "b", other = store / "c";
+    const nlohmann::json key = {{"scene_hash", "rotor"}, {"settings", {{"frame", {{"w", 160}}}}}};
+    {
+        auto memo = std::make_shared<ShadingMemo>(size_t(256) << 20);
+        (void)render_frames(scene, cache_config(1e-4f), frames, memo);
+        for (int f = 0; f < frames; ++f) write_memo_frame(run_a, key, f, *memo->frame(f));
+        write_memo_frame(other, {{"scene_hash", "another"}}, 0, *memo->frame(0));
+    }
+    EXPECT_EQ(runs_sharing_memo(run_b, key), std::vector<std::filesystem::path>{run_a});
+    auto memo = std::make_shared<ShadingMemo>(size_t(256) << 20);
+    memo->set_loader(memo_loader(runs_sharing_memo(run_b, key), key));
+    const std::vector<FrameResult> fed = render_frames(scene, cache_config(4e-4f), frames, memo);
+    const std::vector<FrameResult> scratch =
+        render_frames(scene, cache_config(4e-4f), frames, nullptr);
+    long recalled = 0, shaded = 0;
+    for (int f = 0; f < frames; ++f) {
+        for (const Layer& l : scratch[size_t(f)].layers.layers())
+            ASSERT_EQ(fed[size_t(f)].layers.get(l.name).data, l.data) << f << " " << l.name;
+        recalled += fed[size_t(f)].stats["shading_memo"]["recalled"].get<long>();
+        shaded += fed[size_t(f)].stats["shading_memo"]["shaded"].get<long>();
+    }
+    EXPECT_GT(recalled, 4 * shaded) << "recalled " << recalled << ", shaded " << shaded;
+    EXPECT_EQ(memo->counts().loaded_frames, frames);
+
+    // Damage: refused naming the field; the loader passes over it.
+    const std::filesystem::path file = memo_frame_path(run_a, 1);
+    std::string bytes = read_text_file(file);
+    EXPECT_EQ(field_of_memo(file, {{"scene_hash", "another"}}, 1), "key");
+    bytes[bytes.size() / 2] ^= 0x20;
+    write_text_atomically(file, bytes);
+    EXPECT_EQ(field_of_memo(file, key, 1), "checksum");
+    write_text_atomically(file, bytes.substr(0, 6));
+    EXPECT_EQ(field_of_memo(file, key, 1), "header");
+    EXPECT_EQ(memo_loader({run_a}, key)(1), nullptr);
+    ASSERT_NE(memo_loader({run_a}, key)(2), nullptr);
+    // A table whose keys are out of order (written by hand, checksum valid) is refused too.
+    ShadingMemo::FrameTable bad;
+    bad.entries = {{9, 0, false, {}, {}}, {3, 0, false, {}, {}}};
+    bad.keys = {36, 12};
+    write_memo_frame(run_a, key, 5, bad);
+    EXPECT_EQ(field_of_memo(memo_frame_path(run_a, 5), key, 5), "entries[1]");
+    std::filesystem::remove_all(store);
 }

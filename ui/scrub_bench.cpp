@@ -10,7 +10,9 @@
 //      rendered, cache.q_eps_x set to another value: time until frame F (rendered again from
 //      frame 0) is on screen, by a workbench with its shading memo (render/shading_memo.h) and
 //      by one without (FREQLAB_SHADING_MEMO_MB=0: the run from scratch, scene and Embree
-//      already loaded); interleaved, --cache-change-trials times, into temporary run stores.
+//      already loaded); interleaved, --cache-change-trials times, into temporary run stores;
+//      then a new workbench on the memo's run store (a later session: the points read from
+//      the run store, render/shading_memo_store.h) and one more value.
 // Reported: the jumps' p50 / p95 / max, how many were read from the run store, resident memory
 // (now and peak) after recording and after the jumps, the decoded frames' bytes, the run
 // store's size on disk; the cache change's times and their ratio.
@@ -164,8 +166,26 @@ json cache_change_study(OsMesaHost& host, const WorkbenchOptions& wo, int trials
         std::fprintf(stderr, "%s at frame %d: %.1f s with the memo, %.1f s from scratch\n",
                      value.c_str(), target, arms[0].ms.back() / 1000.0, arms[1].ms.back() / 1000.0);
     }
+    // A later session: a new workbench on the memo arm's run store (nothing in memory), its
+    // recorded frame shown, then another value: the points come from the run store's files.
+    double reopened_ms = -1.0;
+    if (trials > 0) {
+        const ScopedEnvironment dir = arms[0].store.use();
+        arms[0].wb.reset();
+        WorkbenchOptions so = wo;
+        so.frame = target;
+        Workbench later(so);
+        until_shown(host, later);
+        const auto t0 = Clock::now();
+        later.apply_setting("cache.q_eps_x=" + std::to_string(2e-4 * (trials + 1)));
+        until_shown(host, later);
+        reopened_ms = ms_since(t0);
+        std::fprintf(stderr, "reopened in a new workbench, another value: %.1f s\n",
+                     reopened_ms / 1000.0);
+    }
     const double a = percentile(arms[0].ms, 0.5), b = percentile(arms[1].ms, 0.5);
     return {{"frame", target},
+            {"reopened_with_memo_on_disk_ms", reopened_ms},
             {"values", values},
             {"with_memo_ms", arms[0].ms},
             {"from_scratch_ms", arms[1].ms},
@@ -309,6 +329,9 @@ int run_scrub_bench(const ScrubBenchOptions& o) {
             c["with_memo_median_ms"].get<double>() / 1000.0,
             c["from_scratch_median_ms"].get<double>() / 1000.0,
             c["ratio_of_medians"].get<double>());
+        std::printf(
+            "a run reopened by a new workbench (the memo read from the run store): %.1f s\n",
+            c["reopened_with_memo_on_disk_ms"].get<double>() / 1000.0);
     }
     std::printf("wrote %s\n", (fs::path(o.out) / "bench_scrub.json").c_str());
     return 0;

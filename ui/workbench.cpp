@@ -26,6 +26,7 @@
 #include "osmesa_host.h"
 #include "render/frame_checkpoint.h"
 #include "render/frame_renderer.h"
+#include "render/shading_memo_store.h"
 #include "scene/provenance.h"
 #include "scene/scene_loader.h"
 #include "settings_panel.h"
@@ -72,6 +73,8 @@ void restart_renderer(Workbench::State& s) {
         s.shading_memo = std::make_shared<ShadingMemo>(s.shading_memo_cap);
         s.shading_memo_key = memo_key;
     }
+    // Points earlier runs of these settings wrote to the run store, this session or another.
+    s.shading_memo->set_loader(memo_loader(runs_sharing_memo(s.run_dir, memo_key), memo_key));
     if (s.renderer) s.renderer->set_shading_memo(s.shading_memo);
     s.shading_memo_recalled_before = s.shading_memo->counts().recalled;
     {
@@ -229,7 +232,8 @@ void start_job_if_needed(Workbench::State& s) {
         std::lock_guard<std::mutex> lock(s.results_mutex);
         plan = s.last_stage_times;
     }
-    s.job = std::make_unique<Job>([sp, frame, restore_file, every, plan](Progress& progress) {
+    s.job = std::make_unique<Job>([sp, frame, restore_file, every, plan, memo = s.shading_memo,
+                                   memo_key = s.shading_memo_key](Progress& progress) {
         progress.set_stage_count(sp->config.method == RenderMethod::GBuffer ? 1 : 2);
         progress.set_expected_stages(plan);
         if (!restore_file.empty())
@@ -261,6 +265,13 @@ void start_job_if_needed(Workbench::State& s) {
                                            sp->renderer->save_state());
             }
             write_recorded_frame(sp->run_dir, sp->run_key, r);
+            // The points this run shaded, for later runs of other cache.* settings (a frame
+            // whose points were all recalled has them on disk already).
+            const nlohmann::json* shading =
+                r.stats.contains("shading_memo") ? &r.stats["shading_memo"] : nullptr;
+            if (memo && shading && shading->value("shaded", 0L) > 0)
+                if (const auto table = memo->frame(frame))
+                    write_memo_frame(sp->run_dir, memo_key, frame, *table);
             trim_run_store(sp->run_dir);
         } catch (const std::exception& e) {
             failure = std::string("frame not kept in the run store: ") + e.what();

@@ -208,10 +208,15 @@ RunStoreTrim trim_run_store(const fs::path& keep) {
             if (!f->is_regular_file()) continue;
             run.bytes += f->file_size();
             run.used = std::max(run.used, f->last_write_time());
-            if (own && f->path().extension() == ".json") {
+            if (own && f->path().extension() == ".json" &&
+                f->path().parent_path().filename() == "frames") {
                 const fs::path bin = fs::path(f->path()).replace_extension(".bin");
-                frames.push_back(
-                    {f->path(), f->last_write_time(), f->file_size() + fs::file_size(bin, ec)});
+                const fs::path memo =
+                    f->path().parent_path().parent_path() / "memo" / bin.filename();
+                std::error_code mec;  // most frames have no memo file
+                const uint64_t memo_bytes = fs::exists(memo, mec) ? fs::file_size(memo, mec) : 0;
+                frames.push_back({f->path(), f->last_write_time(),
+                                  f->file_size() + fs::file_size(bin, ec) + memo_bytes});
             }
         }
         total += run.bytes;
@@ -230,7 +235,10 @@ RunStoreTrim trim_run_store(const fs::path& keep) {
     for (const Entry& frame : frames) {
         if (total <= cap) break;
         fs::remove(frame.path, ec);  // first: the frame is no longer listed as recorded
-        fs::remove(fs::path(frame.path).replace_extension(".bin"), ec);
+        const fs::path bin = fs::path(frame.path).replace_extension(".bin");
+        fs::remove(bin, ec);
+        fs::remove(frame.path.parent_path().parent_path() / "memo" / bin.filename(),
+                   ec);  // its points
         total -= std::min(total, frame.bytes);
         ++removed.frames;
     }

@@ -80,7 +80,8 @@ struct RunStoreTrim {
 };
 // Keeps the run store (the folder holding `keep`) under $FREQLAB_RUN_STORE_MB (default 16384):
 // removes the least recently used runs other than `keep`, then `keep`'s least recently used
-// frames (never its checkpoints: they are how its frames come back), until the rest fit.
+// frames with their shading memo points (render/shading_memo_store.h; never its checkpoints:
+// they are how its frames come back), until the rest fit.
 RunStoreTrim trim_run_store(const std::filesystem::path& keep);
 
 // What a decoded frame holds in memory: layers, records, positions and cache snapshot.

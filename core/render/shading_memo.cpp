@@ -52,10 +52,30 @@ nlohmann::json ShadingMemo::key_of(const nlohmann::json& run_key) {
     return key;
 }
 
-std::shared_ptr<const ShadingMemo::FrameTable> ShadingMemo::frame(int frame) const {
+std::shared_ptr<const ShadingMemo::FrameTable> ShadingMemo::frame(int frame) {
+    Loader loader;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        const auto it = frames_.find(frame);
+        if (it != frames_.end()) return it->second;
+        if (!loader_ || max_bytes_ == 0 || !asked_.insert(frame).second) return nullptr;
+        loader = loader_;
+    }
+    std::shared_ptr<const FrameTable> loaded = loader(frame);  // reads a file: not under the lock
+    if (!loaded) return nullptr;
     std::lock_guard<std::mutex> lock(mutex_);
-    const auto it = frames_.find(frame);
-    return it == frames_.end() ? nullptr : it->second;
+    if (frames_.count(frame)) return frames_[frame];  // added meanwhile
+    ++counts_.loaded_frames;
+    bytes_ += loaded->bytes();
+    frames_[frame] = loaded;
+    fit_within_cap();
+    return loaded;
+}
+
+void ShadingMemo::set_loader(Loader loader) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    loader_ = std::move(loader);
+    asked_.clear();
 }
 
 void ShadingMemo::add(int frame, std::vector<Entry> entries) {
@@ -94,6 +114,10 @@ void ShadingMemo::add(int frame, std::vector<Entry> entries) {
     bytes_ += table->bytes();
     frames_[frame] = std::move(table);
     counts_.stored += stored;
+    fit_within_cap();
+}
+
+void ShadingMemo::fit_within_cap() {
     while (bytes_ > max_bytes_ && !frames_.empty()) {
         const auto latest = std::prev(frames_.end());
         bytes_ -= latest->second->bytes();

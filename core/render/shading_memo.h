@@ -23,10 +23,12 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -54,7 +56,7 @@ class ShadingMemo {
         size_t bytes() const;
     };
     struct Counts {
-        long recalled = 0, stored = 0, frames = 0, evicted_frames = 0;
+        long recalled = 0, stored = 0, frames = 0, evicted_frames = 0, loaded_frames = 0;
         size_t bytes = 0, max_bytes = 0;
     };
 
@@ -66,7 +68,11 @@ class ShadingMemo {
     static nlohmann::json key_of(const nlohmann::json& run_key);
 
     // The frame's table (null when none); the memo may drop it meanwhile, the pointer stays.
-    std::shared_ptr<const FrameTable> frame(int frame) const;
+    // A frame not in memory is asked of the loader once (render/shading_memo_store.h: the
+    // points earlier runs wrote to the run store) and kept like added points.
+    std::shared_ptr<const FrameTable> frame(int frame);
+    using Loader = std::function<std::shared_ptr<const FrameTable>(int frame)>;
+    void set_loader(Loader loader);
     // Adds the frame's new points (pixels and passes not in its table yet); the table is
     // replaced, so tables handed out are never written. Then drops the latest frames (this
     // one too, when it is the latest) until the memo is within max_bytes.
@@ -75,9 +81,12 @@ class ShadingMemo {
     Counts counts() const;
 
   private:
+    void fit_within_cap();  // drops the latest frames until within max_bytes (mutex_ held)
     mutable std::mutex mutex_;
     size_t max_bytes_ = 0;
     std::map<int, std::shared_ptr<const FrameTable>> frames_;
+    Loader loader_;
+    std::set<int> asked_;  // frames the loader was asked for
     size_t bytes_ = 0;
     Counts counts_;  // recalled, stored, evicted_frames (the rest is filled in by counts())
 };

@@ -24,6 +24,8 @@
 #include "image/image_io.h"
 #include "layer_view.h"
 #include "osmesa_host.h"
+#include "render/frame_store.h"
+#include "render/shading_memo_store.h"
 #include "workbench.h"
 
 using namespace freqlab;
@@ -818,6 +820,41 @@ TEST(GlWorkbench, ARecordedFrameShowsItsLayerFirstAndTheRestFollows) {
     EXPECT_FALSE(wb.frame_complete());
     same(*wb.layers(), 1);  // asked at once: waits for the rest
     EXPECT_TRUE(wb.frame_complete());
+    setenv("FREQLAB_RUN_STORE_DIR", previous.c_str(), 1);
+    fs::remove_all(store);
+}
+
+// A cache.* change in a later session (a new workbench on a recorded run) recalls the radiance
+// points the first session shaded: each frame's points go to the run store with the frame
+// (render/shading_memo_store.h), and a memo empty in memory reads them from there.
+TEST(GlWorkbench, ACacheChangeInALaterSessionRecallsThePointsOfTheRunStore) {
+    const fs::path store = fs::temp_directory_path() / "freqlab_gl_memo_store";
+    fs::remove_all(store);
+    const std::string previous = std::getenv("FREQLAB_RUN_STORE_DIR");
+    setenv("FREQLAB_RUN_STORE_DIR", store.c_str(), 1);
+    GlSession gl;
+    WorkbenchOptions o = small_scene("color");
+    o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/rotor.json";
+    o.method = "cache";
+    {
+        Workbench wb(o);
+        wb.set_frame(2);
+        run_until_shown(gl, wb);
+        EXPECT_TRUE(fs::exists(memo_frame_path(wb.run_directory(), 2)));
+    }
+    Workbench wb(o);
+    wb.set_frame(2);
+    run_until_shown(gl, wb);  // from the run store, nothing rendered
+    wb.apply_setting("cache.q_eps_x=0.0004");
+    run_until_shown(gl, wb);
+    const auto stats = recorded_frame_stats(wb.run_directory());
+    ASSERT_EQ(stats.size(), 3u);
+    for (const auto& [frame, st] : stats) {
+        ASSERT_TRUE(st.contains("shading_memo")) << frame;
+        EXPECT_GT(st["shading_memo"]["recalled"].get<long>(),
+                  4 * st["shading_memo"]["shaded"].get<long>())
+            << "frame " << frame;
+    }
     setenv("FREQLAB_RUN_STORE_DIR", previous.c_str(), 1);
     fs::remove_all(store);
 }
