@@ -112,13 +112,25 @@ std::shared_ptr<FrameResult> recorded_result(Workbench::State& s, int frame) {
     }
 }
 
+namespace {
+
+// The frame shown went from the run store (trimmed, or damaged) after its layers on screen were
+// read: nothing is shown until it renders again, and the status line says why.
+void forget_shown(Workbench::State& s, const std::string& why) {
+    s.shown = nullptr;
+    s.shown_frame = -1;
+    s.status = "frame read again from the run store failed (" + why + "): it renders again";
+}
+
+}  // namespace
+
 void poll_frame_reader(Workbench::State& s) {
     for (BackgroundFrameReader::Read& read : s.frame_reader->take()) {
         if (read.dir != s.run_dir) continue;  // a run no longer shown
         const bool shown = s.shown && s.shown->partial && s.shown->frame == read.frame;
         if (!read.result) {  // went from the run store since its layers were read
             s.recorded.erase(read.frame);
-            if (shown) s.shown = nullptr, s.shown_frame = -1;
+            if (shown) forget_shown(s, read.error);
             continue;
         }
         s.results.keep(read.result);
@@ -139,9 +151,14 @@ void complete_shown(Workbench::State& s) {
     poll_frame_reader(s);
     if (!partial()) return;
     const int frame = s.shown->frame;
-    auto r = std::make_shared<FrameResult>(read_recorded_frame(s.run_dir, s.run_key, frame));
-    s.results.keep(r);
-    s.shown = r;
+    try {
+        auto r = std::make_shared<FrameResult>(read_recorded_frame(s.run_dir, s.run_key, frame));
+        s.results.keep(r);
+        s.shown = r;
+    } catch (const Error& e) {
+        s.recorded.erase(frame);
+        forget_shown(s, e.what());
+    }
 }
 
 void keep_result(Workbench::State& s, FrameResult result) {

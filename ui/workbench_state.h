@@ -187,7 +187,8 @@ std::shared_ptr<FrameResult> recorded_result(Workbench::State& s, int frame);
 // (results_mutex held).
 void poll_frame_reader(Workbench::State& s);
 // The frame shown, whole (exports, traces, the inspector's rows need every layer): waits for or
-// reads what a jump left for later. Throws Error naming the file when it is gone or damaged.
+// reads what a jump left for later. When the file went meanwhile, nothing is shown (the frame
+// renders again) and the status line says why.
 void complete_shown(Workbench::State& s);
 // Keeps a frame just rendered or baked (results_mutex held).
 void keep_result(Workbench::State& s, FrameResult result);
