@@ -314,6 +314,30 @@ TEST(FuzzFindings, ExrDataWindowIsCheckedBeforeOpenExrSizesBuffers) {
     EXPECT_EQ(read_rgb_image(p).width, 4);
 }
 
+// A header naming dataWindow twice: OpenEXR keeps the last (983041 x 8 pixels, 1.8 s of line
+// buffers under ASan), where the header walk checked the first (fuzz_env_exr timeout,
+// corpus/env_exr/regression_duplicate_window.exr). Any attribute named twice is refused.
+TEST(FuzzFindings, ExrAttributeNamedTwiceIsRefused) {
+    const Error e = expect_error([] {
+        read_rgb_image(std::string(FREQLAB_SOURCE_DIR) +
+                       "/tests/fuzz/corpus/env_exr/regression_duplicate_window.exr");
+    });
+    EXPECT_EQ(e.field(), "header.compression");  // the first name seen twice
+    EXPECT_NE(e.message().find("appears twice"), std::string::npos) << e.what();
+    // Built by hand too: a valid file with its dataWindow attribute repeated.
+    const fs::path p = temp_file("twice.exr");
+    LayerSet layers(4, 2);
+    layers.add("color", LayerKind::Color, 3);
+    write_exr(p, layers);
+    std::string bytes = read_bytes(p);
+    const size_t at = bytes.find("dataWindow");
+    ASSERT_NE(at, std::string::npos);
+    const size_t length = std::strlen("dataWindow") + 1 + std::strlen("box2i") + 1 + 4 + 16;
+    bytes.insert(at, bytes.substr(at, length));
+    write_bytes(p, bytes);
+    EXPECT_EQ(expect_error([&] { read_rgb_image(p); }).field(), "header.dataWindow");
+}
+
 // OpenVDB 10's bloscFromStream reads a value chunk marked uncompressed at the length the file
 // declares into a buffer sized for its node, then compares (an ASan-confirmed heap-buffer
 // overflow; fuzz_vdb: "double free or corruption" later). The walk follows the tree's topology

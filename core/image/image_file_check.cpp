@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <set>
 #include <string>
 
 #include "base/error.h"
@@ -44,9 +45,15 @@ class AttributeWalker {
         for (int part = 0;; ++part) {
             if (multipart && part > 0 && peek_end()) return;  // the empty header ends the list
             int attributes = 0;
+            std::set<std::string> seen;
             for (;; ++attributes) {
                 const std::string name = read_name("attribute name");
                 if (name.empty()) break;
+                // OpenEXR keeps one value per name (the last): a second dataWindow would be the
+                // one it sizes its buffers from, not the first this walk checked (fuzz_env_exr:
+                // a 16 x 8 window, then 983041 x 8: 1.8 s of allocation under ASan).
+                if (!seen.insert(name).second)
+                    fail("header." + name, "appears twice in one header");
                 const std::string type = read_name("type of " + name);
                 unsigned char le[4];
                 if (size_ - pos_ < 4 || !in_.read(reinterpret_cast<char*>(le), 4))
