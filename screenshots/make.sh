@@ -84,8 +84,10 @@ rm -rf "$fig_dir"
 # `freqlab gui scenes/rotor.json --method cache --set frame.width=320 --set frame.height=180
 # --set cache.checkpoint_every=5`, Right arrow 11 times (checkpoints before 5 and 10 in the run
 # store), quit, start it again (to 13 first, then quit again) and click frame 23 on the
-# timeline: the shot is taken while it renders frame 13 on the way, from the checkpoint before
-# 10, the viewport holding frame 12 (ticks: green recorded, orange pending, white shown).
+# timeline: the shot is taken while it renders frame 16 on the way, from the checkpoint before
+# 10, the viewport holding frame 16's first image (ticks: green recorded, orange pending, white
+# shown; session 26: the way's ETA, the cache panel on frame 15, and the points of frames 10-13
+# recalled from the run store's shading memo, written by the session that rendered them).
 # window_first_start.png / window_first_start_decisions.png: `freqlab` with no argument in a
 # real window under Xvfb (session 23, by hand): method A's cache on the built-in scene, playing,
 # with the hint line; then the D key (cache decisions over the colour).
