@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <cstring>
 #include <type_traits>
 
 #include "base/byte_stream.h"
 #include "base/error.h"
 #include "base/file_io.h"
 #include "base/hash.h"
+#include "render/frame_checkpoint.h"
 #include "render/frame_store.h"
 
 namespace freqlab {
@@ -123,15 +123,8 @@ std::shared_ptr<const ShadingMemo::FrameTable> read_memo_frame(const fs::path& f
     const std::string_view bytes = mapped.bytes();
     const std::string source = file.string();
     ByteReader r(bytes, source, "memo");
-    if (bytes.size() < 2 * sizeof(uint32_t) + sizeof(uint64_t) || r.get<uint32_t>() != kMagic)
-        throw Error(source, "header", "not a freqlab shading memo frame");
-    const uint32_t version = r.get<uint32_t>();
-    if (version != kMemoFrameVersion)
-        throw Error(source, "version",
-                    "format " + std::to_string(version) + ", this freqlab reads " +
-                        std::to_string(kMemoFrameVersion));
-    uint64_t stored_sum = 0;
-    std::memcpy(&stored_sum, bytes.data() + bytes.size() - sizeof stored_sum, sizeof stored_sum);
+    const uint64_t stored_sum =
+        read_run_file_frame(r, bytes, source, kMagic, kMemoFrameVersion, "shading memo frame");
     if (stored_sum != fnv1a_words(bytes.data(), bytes.size() - sizeof stored_sum))
         throw Error(source, "checksum", "the file is damaged or truncated");
     json found;

@@ -6,13 +6,43 @@
 #include <imgui.h>
 #include <imgui_impl_opengl3.h>
 
+#include <cstdlib>
+#include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "osmesa_host.h"
 #include "workbench.h"
 
 namespace freqlab::ui::test {
+
+// $FREQLAB_RUN_STORE_DIR pointing at an empty temporary folder for this scope; the previous
+// value comes back and the folder goes at the end, also when an assertion returns early.
+class ScopedRunStore {
+  public:
+    explicit ScopedRunStore(const std::string& name)
+        : dir_(std::filesystem::temp_directory_path() / name) {
+        std::filesystem::remove_all(dir_);
+        if (const char* old = std::getenv("FREQLAB_RUN_STORE_DIR")) previous_ = old;
+        setenv("FREQLAB_RUN_STORE_DIR", dir_.c_str(), 1);
+    }
+    ScopedRunStore(const ScopedRunStore&) = delete;
+    ScopedRunStore& operator=(const ScopedRunStore&) = delete;
+    ~ScopedRunStore() {
+        if (previous_)
+            setenv("FREQLAB_RUN_STORE_DIR", previous_->c_str(), 1);
+        else
+            unsetenv("FREQLAB_RUN_STORE_DIR");
+        std::error_code ec;
+        std::filesystem::remove_all(dir_, ec);
+    }
+    const std::filesystem::path& dir() const { return dir_; }
+
+  private:
+    std::filesystem::path dir_;
+    std::optional<std::string> previous_;
+};
 
 // An ImGui context plus an OSMesa context with the OpenGL3 backend, per test.
 struct GlSession {

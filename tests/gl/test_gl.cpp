@@ -723,10 +723,8 @@ TEST(GlWorkbench, EnvironmentViewIsNoFrame) {
 // 6 in the run store; a second session (same scene and settings) jumping to frame 6 renders only
 // frame 6, from the checkpoint, and shows the first session's bytes; a jump to 5 renders 3, 4, 5.
 TEST(GlWorkbench, JumpsResumeFromTheRunsCheckpointsWithTheSameBytes) {
-    const fs::path store = fs::temp_directory_path() / "freqlab_gl_run_store";
-    fs::remove_all(store);
-    const std::string previous = std::getenv("FREQLAB_RUN_STORE_DIR");
-    setenv("FREQLAB_RUN_STORE_DIR", store.c_str(), 1);
+    const ScopedRunStore scoped("freqlab_gl_run_store");
+    const fs::path& store = scoped.dir();
     GlSession gl;
     WorkbenchOptions o = small_scene("color");
     o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/rotor.json";
@@ -772,8 +770,6 @@ TEST(GlWorkbench, JumpsResumeFromTheRunsCheckpointsWithTheSameBytes) {
         EXPECT_EQ(wb.recorded_frames(), (std::vector<int>{0, 3, 4, 5, 6}));
         EXPECT_EQ(wb.layers()->get("color").data, first[5]);
     }
-    setenv("FREQLAB_RUN_STORE_DIR", previous.c_str(), 1);
-    fs::remove_all(store);
 }
 
 // A jump to a recorded frame shows the layers on screen first (a read of ~5 % of the frame: issue
@@ -781,10 +777,7 @@ TEST(GlWorkbench, JumpsResumeFromTheRunsCheckpointsWithTheSameBytes) {
 // the background; whoever needs every layer at once (exports, the inspector, tests) waits for
 // it. Both are the recorded bytes.
 TEST(GlWorkbench, ARecordedFrameShowsItsLayerFirstAndTheRestFollows) {
-    const fs::path store = fs::temp_directory_path() / "freqlab_gl_partial_store";
-    fs::remove_all(store);
-    const std::string previous = std::getenv("FREQLAB_RUN_STORE_DIR");
-    setenv("FREQLAB_RUN_STORE_DIR", store.c_str(), 1);
+    const ScopedRunStore store("freqlab_gl_partial_store");
     GlSession gl;
     WorkbenchOptions o = small_scene("object");
     o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/rotor.json";
@@ -820,18 +813,13 @@ TEST(GlWorkbench, ARecordedFrameShowsItsLayerFirstAndTheRestFollows) {
     EXPECT_FALSE(wb.frame_complete());
     same(*wb.layers(), 1);  // asked at once: waits for the rest
     EXPECT_TRUE(wb.frame_complete());
-    setenv("FREQLAB_RUN_STORE_DIR", previous.c_str(), 1);
-    fs::remove_all(store);
 }
 
 // A cache.* change in a later session (a new workbench on a recorded run) recalls the radiance
 // points the first session shaded: each frame's points go to the run store with the frame
 // (render/shading_memo_store.h), and a memo empty in memory reads them from there.
 TEST(GlWorkbench, ACacheChangeInALaterSessionRecallsThePointsOfTheRunStore) {
-    const fs::path store = fs::temp_directory_path() / "freqlab_gl_memo_store";
-    fs::remove_all(store);
-    const std::string previous = std::getenv("FREQLAB_RUN_STORE_DIR");
-    setenv("FREQLAB_RUN_STORE_DIR", store.c_str(), 1);
+    const ScopedRunStore store("freqlab_gl_memo_store");
     GlSession gl;
     WorkbenchOptions o = small_scene("color");
     o.scene = std::string(FREQLAB_SOURCE_DIR) + "/scenes/rotor.json";
@@ -855,8 +843,6 @@ TEST(GlWorkbench, ACacheChangeInALaterSessionRecallsThePointsOfTheRunStore) {
                   4 * st["shading_memo"]["shaded"].get<long>())
             << "frame " << frame;
     }
-    setenv("FREQLAB_RUN_STORE_DIR", previous.c_str(), 1);
-    fs::remove_all(store);
 }
 
 // A/B of two recorded runs (issue "The timeline as a recorded run"): the run kept as A, a
