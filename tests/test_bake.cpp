@@ -338,6 +338,60 @@ TEST(Bake, TabulatedIrradianceMatchesQueryAndDoubleProduct) {
     std::printf("tabulated irradiance: worst error %.2e of the facing value\n", worst);
 }
 
+// Segments through several media (ImpulseIrradianceCache::blend): the bilinear blend of the
+// grid's node tables against the table built at the mixture's own (g, albedo), at random
+// mixtures (albedo up to 0.999 and exactly 1), distances, cosines and shifts; error relative to
+// the facing value as above. A blend is the same whatever order the cells were first met in.
+TEST(Bake, MixtureBlendMatchesTheTableOfItsOwnCoefficients) {
+    const ImpulseTables& tables = test_support::shared_impulse_tables();
+    const ImpulseIrradianceCache cache(tables);
+    CounterRng rng(5, 2, 9, 1);
+    double worst = 0.0;
+    for (int m = 0; m < 8; ++m) {
+        const double g = -0.3 + 1.2 * rng.next_double();  // -0.3 .. 0.9
+        const double albedo = m == 7 ? 1.0 : 1.0 - std::pow(10.0, -3.0 * rng.next_double());
+        const ImpulseIrradiance own(tables, g, albedo, tables.bounces());
+        const ImpulseIrradianceBlend blend = cache.blend(g, albedo, tables.bounces());
+        ASSERT_GT(blend.count, 0);
+        double weights = 0.0;
+        for (int k = 0; k < blend.count; ++k) weights += blend.weight[k];
+        EXPECT_NEAR(weights, 1.0, 1e-12);
+        double worst_here = 0.0;
+        for (int i = 0; i < 40; ++i) {
+            const double D = 0.01 * std::pow(1500.0, rng.next_double());  // 0.01 .. 15
+            const double cos = 2.0 * rng.next_double() - 1.0, shift = rng.next_double();
+            const ImpulseIrradiance::At at = ImpulseIrradiance::at(D);
+            auto eval = [&](const ImpulseIrradiance& t, int kind) {
+                return kind == 0   ? t.point(at, cos)
+                       : kind == 1 ? t.directional(at, cos)
+                                   : t.area(at, shift, cos, cos);
+            };
+            for (int kind = 0; kind < 3; ++kind) {
+                const ScatteredIrradiance e = eval(own, kind);
+                ScatteredIrradiance b;
+                for (int k = 0; k < blend.count; ++k) {
+                    const ScatteredIrradiance one = eval(*blend.table[k], kind);
+                    b.single += blend.weight[k] * one.single;
+                    b.multiple += blend.weight[k] * one.multiple;
+                }
+                const ScatteredIrradiance facing = eval(own, kind == 2 ? 0 : kind);
+                const double scale = std::abs(facing.single) + std::abs(facing.multiple) + 1e-30;
+                const double err =
+                    std::max(std::abs(b.single - e.single), std::abs(b.multiple - e.multiple)) /
+                    std::max(scale, std::abs(e.single) + std::abs(e.multiple));
+                worst = std::max(worst, err);
+                worst_here = std::max(worst_here, err);
+                EXPECT_LT(err, 2e-3)
+                    << "g " << g << " albedo " << albedo << " kind " << kind << " D " << D << ": "
+                    << b.single << " vs " << e.single << ", " << b.multiple << " vs " << e.multiple;
+            }
+        }
+        std::printf("  g %.3f albedo %.5f: worst %.2e\n", g, albedo, worst_here);
+    }
+    std::printf("mixture blend: worst error %.2e of the facing value (%zu node tables)\n", worst,
+                cache.blend_nodes());
+}
+
 // Probes: a constant environment gives incident radiance L everywhere, whose order-3 SH is
 // L sqrt(4 pi) in the DC term and 0 elsewhere (statistical bounds); in fog, impulse and VPT
 // probes agree on single scattering from a point light.

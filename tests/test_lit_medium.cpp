@@ -13,6 +13,7 @@
 #include "bake_fixture.h"
 #include "scene/scene_loader.h"
 #include "shared_tables.h"
+#include "volume/emitter_roulette.h"
 #include "volume/lightmap_baker.h"
 #include "volume/shadowed_texels.h"
 
@@ -459,4 +460,70 @@ TEST(LitMedium, ForwardScatteringBeyondTheLegendreBasisEqualsVpt) {
     // The bakes differ with g: g = 0.9 is not g = 0.6 (8.6 % and 17 % here).
     EXPECT_LT(impulse_means[4], 0.95 * impulse_means[0]);
     EXPECT_LT(impulse_means[5], 0.95 * impulse_means[1]);
+}
+
+// Per-emitter roulette of the Monte Carlo terms (volume/emitter_roulette.h): the keep
+// probabilities follow the strengths, floored, and a lone emitter is always kept.
+TEST(EmitterRoulette, KeepProbabilitiesFollowTheStrengths) {
+    std::vector<float> keep;
+    emitter_keep_probabilities({8.0f, 1.0f, 1.0f, 0.0f}, 2.0f, keep);
+    ASSERT_EQ(keep.size(), 4u);
+    EXPECT_FLOAT_EQ(keep[0], 1.0f);               // 2 x 0.8, capped
+    EXPECT_FLOAT_EQ(keep[1], 0.2f);               // 2 x 0.1
+    EXPECT_FLOAT_EQ(keep[3], kEmitterKeepFloor);  // no strength known: the floor, not 0
+    emitter_keep_probabilities({5.0f}, 2.0f, keep);
+    EXPECT_FLOAT_EQ(keep[0], 1.0f);
+    emitter_keep_probabilities({5.0f, 1.0f}, 0.0f, keep);  // budget 0: every emitter
+    EXPECT_FLOAT_EQ(keep[1], 1.0f);
+    emitter_keep_probabilities({0.0f, 0.0f, std::nanf("")}, 1.0f, keep);  // nothing to rank by
+    for (float k : keep) EXPECT_FLOAT_EQ(k, 1.0f);
+}
+
+// Many lights of very different strengths around an occluder in haze (valley's case: a sun, a
+// faint and two strong point lights, a quad): impulse's texel terms (lit medium, corrections,
+// the walk) and VPT keep their means with the roulette on (budget 1) against every emitter
+// every time (budget 0), t-test on per-path means, while tracing fewer rays.
+TEST(EmitterRoulette, KeepsTheMeanOfImpulseAndVptWithFewerRays) {
+    Fixture f(occluder_in_haze(
+        R"({"type": "directional", "direction": [-0.25, 0.15, -1], "irradiance": 3.0},
+           {"type": "point", "position": [0.2, -0.1, 2.2], "intensity": 6.0},
+           {"type": "point", "position": [-2.5, 2.0, 1.0], "intensity": 0.3},
+           {"type": "point", "position": [2.6, 2.4, 0.8], "intensity": 4.0},
+           {"type": "quad", "corner": [-3.5, -3.5, 2.4], "edge_u": [1, 0, 0],
+            "edge_v": [0, 1, 0], "radiance": 2.0})"));
+    const ImpulseTables& tables = test_support::shared_impulse_tables();
+    BakeSettings s;
+    s.bounces = 1;
+    s.media_bounces = 4;
+    s.texel_mc_rate = 1.0f;
+    const vec3 n(0.0f, 0.0f, 1.0f);
+    for (BakeMethod method : {BakeMethod::Impulse, BakeMethod::Vpt}) {
+        for (const vec3 p : {vec3(-0.3f, 0.2f, 0.0f), vec3(1.8f, -1.0f, 0.0f)}) {
+            long rays[2] = {0, 0};
+            auto scattered = [&](float budget, uint64_t key, long* ray_count) {
+                s.mc_emitter_budget = budget;
+                const BakeEstimator e(*f.rays, f.media, &tables, method, s);
+                BakeCounters counters;
+                for (int i = 0; i < 2000; ++i) {
+                    CounterRng rng(41, key, 0, uint64_t(i));
+                    e.estimate(p, n, vec3(0.7f), rng, counters);
+                }
+                *ray_count = counters.rays;
+                return path_mean(e, p, n, 38, key, 60000, [&](const IrradianceParts& parts) {
+                    return double(luminance(parts.single + parts.multiple));
+                });
+            };
+            const auto [a, va] = scattered(0.0f, 1, &rays[0]);
+            const auto [b, vb] = scattered(1.0f, 2, &rays[1]);
+            const double t = (a - b) / std::sqrt(va + vb);
+            std::printf(
+                "%s at (%.1f, %.1f): every emitter %.5f +- %.5f (%ld rays), roulette %.5f +- "
+                "%.5f (%ld rays), t %.2f\n",
+                std::string(enum_name(kBakeMethodNames, method)).c_str(), p.x, p.y, a,
+                std::sqrt(va), rays[0], b, std::sqrt(vb), rays[1], t);
+            EXPECT_LT(std::abs(t), 4.0);
+            EXPECT_LT(std::sqrt(va + vb), 0.03 * a) << "precise enough to mean something";
+            EXPECT_LT(double(rays[1]), 0.8 * double(rays[0])) << "the roulette saves rays";
+        }
+    }
 }

@@ -48,6 +48,15 @@ const SettingsSchema& BakeSettings::schema() {
                    "texel_multiple walk), weighted by 1 / rate (Russian roulette: unbiased, "
                    "noisier). They are small corrections of smooth light, and cost as much as "
                    "the rest of the path; occluded connections' lit medium always runs.")
+            .field(&BakeSettings::mc_emitter_budget, "mc_emitter_budget", 0, 64, "emitters",
+                   kInvalidatesBake,
+                   "Impulse and vpt: the Monte Carlo terms' emitters (the texel's corrections and "
+                   "lit medium per connection, the walks' next-event estimation and light "
+                   "tracing at scattering events) are each kept by Russian roulette with "
+                   "probability min(1, max(0.1, budget x its share of the vertex's emitter "
+                   "strength)), weighted by its inverse: unbiased, about this many emitters a "
+                   "vertex instead of all of them (valley's 10 lights). A lone emitter is always "
+                   "kept. 0: every emitter, every time.")
             .field(&BakeSettings::texel_mc_radius, "texel_mc_radius", 0, 8, "texels",
                    kInvalidatesBake,
                    "Impulse: the texel's Monte Carlo terms (see texel_mc_rate) are the mean of "

@@ -48,6 +48,10 @@ struct BakeSettings {
     // real media run (single-scattering corrections, hidden surfaces' light, the multiple-
     // scattering walk), weighted up by its inverse (Russian roulette: unbiased at any spp).
     float texel_mc_rate = 0.02f;
+    // The Monte Carlo terms' emitters (per-texel terms, texel walks, vpt's scattering events):
+    // each kept by Russian roulette with a probability that follows its strength, about this
+    // many kept per vertex (volume/emitter_roulette.h); 0: every emitter, every time.
+    float mc_emitter_budget = 2.0f;
     // Their per-texel sums filtered over the texels within this many of it (texel_filter.h).
     int texel_mc_radius = 3;
     float texel_density = 16.0f;  // texels per scene unit

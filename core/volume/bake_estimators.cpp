@@ -7,6 +7,7 @@
 #include "base/error.h"
 #include "math/sampling.h"
 #include "math/sh.h"
+#include "volume/emitter_roulette.h"
 #include "volume/vertex_corrections.h"
 
 namespace freqlab {
@@ -220,29 +221,28 @@ void BakeEstimator::add_scattered(EmitterKind kind, const vec3& intensity, const
     const double shift_q = std::clamp(shift, 0.0, 1.0);
     const float cos_light = glm::dot(dir, n);
     ++counters.impulse_queries;
-    if (const ImpulseIrradiance* table = irradiance_table(g, albedo, last_bounce)) {
-        // The tabulated double product (impulse_irradiance.h): one lookup per part.
+    // One medium's segment: its own table; a mixture's: the blend of its cell's node tables.
+    ImpulseIrradianceBlend tables;
+    if (irradiance_ && optics.scattering_media > 1) {
+        tables = irradiance_->blend(g, albedo, last_bounce);
+    } else if (const ImpulseIrradiance* table = irradiance_table(g, albedo, last_bounce)) {
+        tables.table[0] = table;
+        tables.weight[0] = 1.0;
+        tables.count = 1;
+    }
+    if (tables.count > 0) {
+        // The tabulated double product (impulse_irradiance.h): one lookup per part and table.
         const ImpulseIrradiance::At D = ImpulseIrradiance::at(query_optical);
         const double scale = kind == EmitterKind::Directional ? 1.0 : sigma_t * sigma_t;
-        ScatteredIrradiance e;
-        if (kind == EmitterKind::Point) {
-            e = table->point(D, cos_light);
-        } else if (kind == EmitterKind::Directional) {
-            e = table->directional(D, cos_light);
-        } else {
-            // The single lobe's axis is tilted from l towards the emitter normal's part
-            // across l, t = (n_e - (n_e . l) l) / |...|, whose length is the shift itself.
-            const float tilt = float(table->tilt(D, shift_q));
-            float cos_single = cos_light;
-            if (tilt != 0.0f && shift_q > 1e-6) {
-                const float nl_l = glm::dot(emitter_normal, dir);
-                const float t_n = (glm::dot(emitter_normal, n) - nl_l * cos_light) / float(shift_q);
-                cos_single = small_angle_cos(tilt) * cos_light + small_angle_sin(tilt) * t_n;
-            }
-            e = table->area(D, shift_q, cos_single, cos_light);
+        ScatteredIrradiance sum;
+        for (int k = 0; k < tables.count; ++k) {
+            const ScatteredIrradiance e = tabulated_scattered(
+                *tables.table[k], D, kind, dir, shift_q, emitter_normal, n, cos_light);
+            sum.single += tables.weight[k] * e.single;
+            sum.multiple += tables.weight[k] * e.multiple;
         }
-        out.single += intensity * float(std::max(0.0, e.single * scale));
-        out.multiple += intensity * float(std::max(0.0, e.multiple * scale));
+        out.single += intensity * float(std::max(0.0, sum.single * scale));
+        out.multiple += intensity * float(std::max(0.0, sum.multiple * scale));
         return;
     }
     ImpulseQuery q;
@@ -265,6 +265,25 @@ void BakeEstimator::add_scattered(EmitterKind kind, const vec3& intensity, const
     // A truncated ZH lobe rings slightly negative far from its axis; irradiance cannot.
     out.single += intensity * float(std::max(0.0, e_single));
     out.multiple += intensity * float(std::max(0.0, e_multiple));
+}
+
+ScatteredIrradiance BakeEstimator::tabulated_scattered(const ImpulseIrradiance& table,
+                                                       const ImpulseIrradiance::At& D,
+                                                       EmitterKind kind, const vec3& dir,
+                                                       double shift, const vec3& emitter_normal,
+                                                       const vec3& n, float cos_light) {
+    if (kind == EmitterKind::Point) return table.point(D, cos_light);
+    if (kind == EmitterKind::Directional) return table.directional(D, cos_light);
+    // The single lobe's axis is tilted from l towards the emitter normal's part across l,
+    // t = (n_e - (n_e . l) l) / |...|, whose length is the shift itself.
+    const float tilt = float(table.tilt(D, shift));
+    float cos_single = cos_light;
+    if (tilt != 0.0f && shift > 1e-6) {
+        const float nl_l = glm::dot(emitter_normal, dir);
+        const float t_n = (glm::dot(emitter_normal, n) - nl_l * cos_light) / float(shift);
+        cos_single = small_angle_cos(tilt) * cos_light + small_angle_sin(tilt) * t_n;
+    }
+    return table.area(D, shift, cos_single, cos_light);
 }
 
 glm::dvec3 BakeEstimator::tilted_axis(const glm::dvec3& l, const vec3& emitter_normal,
@@ -395,6 +414,46 @@ void BakeEstimator::add_lit_medium(const EmitterSample& s, const vec3& p, const 
     if (no_multiple) return;
     parts.multiple += lit.multiple * weight;
     if (lit.seen) parts.multiple += higher_orders * weight;
+}
+
+float BakeEstimator::emitter_strength(const EmitterSample& s) {
+    if (!std::isfinite(s.distance)) return luminance(s.irradiance);
+    const double d2 = std::max(s.distance * s.distance, 1e-12);
+    return float(double(luminance(s.intensity)) / d2);
+}
+
+template <class Gathered>
+void BakeEstimator::event_keep(const std::vector<EmitterSample>& emitters, Gathered gathered,
+                               std::vector<float>& keep) const {
+    thread_local std::vector<float> strength;
+    strength.assign(emitters.size(), 0.0f);
+    size_t count = 0;
+    for (size_t i = 0; i < emitters.size(); ++i)
+        if (gathered(emitters[i])) {
+            strength[i] = emitter_strength(emitters[i]);
+            ++count;
+        }
+    emitter_keep_probabilities(strength, count > 1 ? settings_.mc_emitter_budget : 0.0f, keep);
+}
+
+bool BakeEstimator::has_mc_term(const EmitterSample& s, const OccludedConnection& c,
+                                const vec3& n) const {
+    return c.occluded || (settings_.single_correction && glm::dot(n, s.dir) > 0.0f);
+}
+
+std::vector<float> BakeEstimator::mc_keep(const std::vector<EmitterSample>& emitters,
+                                          const std::vector<OccludedConnection>& occluded,
+                                          const vec3& n) const {
+    std::vector<float> strength(emitters.size(), 0.0f), keep;
+    size_t terms = 0;
+    for (size_t i = 0; i < emitters.size() && i < occluded.size(); ++i)
+        if (has_mc_term(emitters[i], occluded[i], n)) {
+            strength[i] = emitter_strength(emitters[i]);
+            ++terms;
+        }
+    // One emitter with a term is kept for sure, whatever the others (which have none).
+    emitter_keep_probabilities(strength, terms > 1 ? settings_.mc_emitter_budget : 0.0f, keep);
+    return keep;
 }
 
 BakeEstimator::MediumPoint BakeEstimator::draw_medium_point(const vec3& p, const vec3& n,
@@ -819,13 +878,24 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
         mc_weight = 1.0f / settings_.texel_mc_rate;
     }
     IrradianceParts mc;
-    for (size_t i = 0; i < occluded.size() && mc_here; ++i) {
-        if (occluded[i].occluded)
-            add_lit_medium(local[i], p, n, occluded[i].multiple, rng, counters, mc, walk_here);
-        else if (settings_.single_correction && glm::dot(n, local[i].dir) > 0.0f)
-            mc.single += std::isfinite(local[i].distance)
-                             ? local_single_correction(local[i], p, n, rng, counters)
-                             : single_correction(local[i], p, n, rng, counters);
+    if (mc_here && !occluded.empty()) {
+        // Each emitter's terms by roulette on its strength (bake.mc_emitter_budget).
+        const std::vector<float> keep = mc_keep(local, occluded, n);
+        for (size_t i = 0; i < occluded.size(); ++i) {
+            if (!has_mc_term(local[i], occluded[i], n)) continue;
+            const float w = emitter_roulette_weight(keep[i], rng);
+            if (w == 0.0f) continue;
+            IrradianceParts term;
+            if (occluded[i].occluded)
+                add_lit_medium(local[i], p, n, occluded[i].multiple, rng, counters, term,
+                               walk_here);
+            else
+                term.single += std::isfinite(local[i].distance)
+                                   ? local_single_correction(local[i], p, n, rng, counters)
+                                   : single_correction(local[i], p, n, rng, counters);
+            mc.single += term.single * w;
+            mc.multiple += term.multiple * w;
+        }
     }
     buffers[size_t(depth)] = std::move(local);
     if (mc_here && settings_.hidden_surface_light && !surface_walk_here && !prepass && depth == 0 &&
@@ -942,8 +1012,28 @@ vec3 BakeEstimator::point_lights_along(const vec3& o, const vec3& d, double t_ma
                                        BakeCounters& counters) const {
     vec3 sum(0.0f);
     const double t_end = std::min(t_max, media_.exit_distance(o, d));
-    for (const Light& light : scene_.scene().lights) {
+    const std::vector<Light>& lights = scene_.scene().lights;
+    // The roulette's strength of each point light: the integral of I / r^2 along the segment,
+    // (I / h) x the angle it subtends (what equiangular sampling draws from).
+    thread_local std::vector<float> strength, keep;
+    strength.clear();
+    for (const Light& light : lights) {
         if (light.type != LightType::Point) continue;
+        float st = 0.0f;
+        if (t_end > 0.0 && std::isfinite(t_end)) {
+            const glm::dvec3 oc = glm::dvec3(light.position) - glm::dvec3(o);
+            const double delta = glm::dot(oc, glm::dvec3(d));
+            const double h = std::max(glm::length(oc - delta * glm::dvec3(d)), 1e-9);
+            st = float(double(luminance(light.intensity)) / h *
+                       (std::atan((t_end - delta) / h) - std::atan(-delta / h)));
+        }
+        strength.push_back(st);
+    }
+    emitter_keep_probabilities(strength, settings_.mc_emitter_budget, keep);
+    size_t k = 0;
+    for (const Light& light : lights) {
+        if (light.type != LightType::Point) continue;
+        const float keep_k = keep[k++];
         const float u = rng.next_float();  // drawn for every point light: streams stay aligned
         if (!(t_end > 0.0)) continue;
         // Equiangular sampling: the 1/r^2 of the light along the segment.
@@ -951,6 +1041,8 @@ vec3 BakeEstimator::point_lights_along(const vec3& o, const vec3& d, double t_ma
         const double delta = glm::dot(oc, glm::dvec3(d));
         const double h = glm::length(oc - delta * glm::dvec3(d));
         if (h < 1e-9) continue;  // the light on the ray's line: a set of measure zero
+        const float roulette = emitter_roulette_weight(keep_k, rng);
+        if (roulette == 0.0f) continue;
         EquiangularSample ea;
         if (!sample_equiangular(delta, h, 0.0, t_end, double(u), &ea)) continue;
         const double t = ea.t, pdf = ea.pdf;
@@ -966,7 +1058,7 @@ vec3 BakeEstimator::point_lights_along(const vec3& o, const vec3& d, double t_ma
         const double w = media_.transmittance(o, d, t) * here.sigma_s *
                          hg_phase(here.g, glm::dot(l, d)) / r2 * media_.transmittance(x, l, dist) /
                          pdf;
-        sum += light.intensity * float(w);
+        sum += light.intensity * float(w * roulette);
     }
     return sum;
 }
@@ -1036,8 +1128,9 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
     const bool media_multiple_only = texel != nullptr;
     const bool gather_emitters = !texel || texel->emitters_multiple;
     std::vector<EmitterSample> emitters;
-    int chain = 0;      // scattering events since the last surface vertex
-    int category = -1;  // fixed at the first surface vertex: 0 surface, 1 single, 2 multiple
+    std::vector<float> keep;  // the emitters' roulette at a scattering event
+    int chain = 0;            // scattering events since the last surface vertex
+    int category = -1;        // fixed at the first surface vertex: 0 surface, 1 single, 2 multiple
     int surface_vertices = 0, events = 0;
     WalkScatter last;  // the last scattering event (texel walks' surface light)
     const bool point_lit_mis =
@@ -1078,14 +1171,21 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
             sample_emitters(x, rng, emitters);
             if (!gather_emitters || (media_multiple_only && chain == 1))
                 emitters.clear();  // single: not asked
-            for (const EmitterSample& s : emitters) {
-                // point_lights_along() has point lights; behind a quad nothing arrives.
-                if (s.kind == EmitterKind::Point || s.behind) continue;
+            // point_lights_along() has point lights; behind a quad nothing arrives.
+            auto gathered = [](const EmitterSample& s) {
+                return s.kind != EmitterKind::Point && !s.behind;
+            };
+            event_keep(emitters, gathered, keep);
+            for (size_t i = 0; i < emitters.size(); ++i) {
+                const EmitterSample& s = emitters[i];
+                if (!gathered(s)) continue;
+                const float w = emitter_roulette_weight(keep[i], rng);
+                if (w == 0.0f) continue;
                 // Light travels along -s.dir, then along -dir after scattering at x.
                 const float phase = float(hg_phase(c.g, glm::dot(s.dir, dir)));
                 ++counters.rays;
                 if (scene_.occluded(shadow_ray(x, s.dir, s.distance))) continue;
-                add(cat, throughput * s.irradiance * phase *
+                add(cat, throughput * s.irradiance * (phase * w) *
                              float(media_.transmittance(x, s.dir, s.distance)));
             }
             const float survive =

@@ -143,6 +143,9 @@ class BakeEstimator {
     std::vector<std::string> trace_texel(const vec3& p, const vec3& n, const vec3& albedo,
                                          CounterRng& rng) const;
 
+    // Node tables built so far for segments through several media (impulse_irradiance.h).
+    size_t mixture_tables() const { return irradiance_ ? irradiance_->blend_nodes() : 0; }
+
   private:
     struct EmitterSample {
         EmitterKind kind = EmitterKind::Point;
@@ -278,6 +281,19 @@ class BakeEstimator {
     void add_lit_medium(const EmitterSample& s, const vec3& p, const vec3& n,
                         const vec3& higher_orders, CounterRng& rng, BakeCounters& counters,
                         IrradianceParts& parts, bool no_multiple = false) const;
+    // The Monte Carlo terms' roulette (volume/emitter_roulette.h): an emitter sample's strength
+    // at the receiver (I / d^2, or E when distant), whether a connection has a term (an
+    // occluded one's lit medium, a visible one's single-scattering correction), and each
+    // emitter's keep probability at a vertex (1 for a vertex with one term).
+    static float emitter_strength(const EmitterSample& s);
+    bool has_mc_term(const EmitterSample& s, const OccludedConnection& c, const vec3& n) const;
+    // The same at a walk's scattering event, over the emitters gathered(s) picks.
+    template <class Gathered>
+    void event_keep(const std::vector<EmitterSample>& emitters, Gathered gathered,
+                    std::vector<float>& keep) const;
+    std::vector<float> mc_keep(const std::vector<EmitterSample>& emitters,
+                               const std::vector<OccludedConnection>& occluded,
+                               const vec3& n) const;
     // trace_texel's lines for an occluded connection.
     template <class Line>
     void trace_occluded(const EmitterSample& s, const vec3& p, const vec3& n, const vec3& albedo,
@@ -352,6 +368,12 @@ class BakeEstimator {
                                  CounterRng& rng) const;
     // The tabulated double products for a segment's effective medium (null: query directly).
     const ImpulseIrradiance* irradiance_table(double g, double albedo, int last_bounce) const;
+    // One table's scattered irradiance per unit strength (add_scattered's lookup).
+    static ScatteredIrradiance tabulated_scattered(const ImpulseIrradiance& table,
+                                                   const ImpulseIrradiance::At& D, EmitterKind kind,
+                                                   const vec3& dir, double shift,
+                                                   const vec3& emitter_normal, const vec3& n,
+                                                   float cos_light);
     bool visible(const vec3& from, const vec3& n, const vec3& dir, double distance,
                  BakeCounters& counters) const;
     vec3 origin(const vec3& p, const vec3& n) const;

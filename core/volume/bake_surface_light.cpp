@@ -24,6 +24,7 @@
 #include <cmath>
 
 #include "volume/bake_estimators.h"
+#include "volume/emitter_roulette.h"
 
 namespace freqlab {
 
@@ -67,10 +68,24 @@ bool BakeEstimator::point_lit_point(const Light& light, const SurfaceHit& y,
 vec3 BakeEstimator::point_lit_surface_light(const WalkScatter& at, CounterRng& rng,
                                             BakeCounters& counters) const {
     vec3 sum(0.0f);
-    for (const Light& light : scene_.scene().lights) {
+    const std::vector<Light>& lights = scene_.scene().lights;
+    // The roulette (emitter_roulette.h) on each light's strength at x, I / |x - light|^2.
+    thread_local std::vector<float> strength, keep;
+    strength.clear();
+    for (const Light& light : lights)
+        if (light.type == LightType::Point) {
+            const vec3 to = light.position - at.x;
+            strength.push_back(luminance(light.intensity) / std::max(glm::dot(to, to), 1e-12f));
+        }
+    emitter_keep_probabilities(strength, settings_.mc_emitter_budget, keep);
+    size_t k = 0;
+    for (const Light& light : lights) {
         if (light.type != LightType::Point) continue;
+        const float keep_k = keep[k++];
         // Drawn for every point light: streams stay aligned.
         const float u1 = rng.next_float(), u2 = rng.next_float();
+        const float roulette = emitter_roulette_weight(keep_k, rng);
+        if (roulette == 0.0f) continue;
         const vec3 w = sample_uniform_sphere(u1, u2);
         ++counters.rays;
         const SurfaceHit y = scene_.intersect(Ray{light.position, w, 0.0f, INFINITY});
@@ -88,7 +103,7 @@ vec3 BakeEstimator::point_lit_surface_light(const WalkScatter& at, CounterRng& r
         // transmittance x cos_y / r^2; the roulette is not part of the light's path).
         const double weight =
             p.light_pdf * p.light_pdf / (p.light_pdf * p.light_pdf + p.walk_pdf * p.walk_pdf);
-        sum += albedo * kInvPi * p.irradiance * float(p.walk_f / p.light_pdf * weight);
+        sum += albedo * kInvPi * p.irradiance * float(p.walk_f / p.light_pdf * weight * roulette);
     }
     return sum;
 }

@@ -326,4 +326,79 @@ const ImpulseIrradiance* ImpulseIrradianceCache::get(double g, double albedo,
     return found;
 }
 
+double ImpulseIrradianceCache::blend_node_albedo(int k) {
+    if (k >= kBlendAlbedoNodes - 1) return 1.0;
+    return 1.0 - std::exp2(-double(k) * kBlendAlbedoStep);
+}
+
+double ImpulseIrradianceCache::blend_coordinate(double albedo) {
+    const double v_max = double(kBlendAlbedoNodes - 1);
+    // Between the second-last node and albedo 1 the coordinate is linear in the albedo.
+    const double a_last = blend_node_albedo(kBlendAlbedoNodes - 2);
+    if (albedo >= a_last) return v_max - 1.0 + (albedo - a_last) / (1.0 - a_last);
+    return -std::log2(1.0 - std::max(albedo, 0.0)) / kBlendAlbedoStep;
+}
+
+double ImpulseIrradianceCache::blend_node_g(int k) {
+    return std::clamp(1.0 - std::exp2(-double(k) * kBlendGStep), -kGRange, kGRange);
+}
+
+double ImpulseIrradianceCache::blend_g_coordinate(double g) {
+    return -std::log2(1.0 - g) / kBlendGStep;
+}
+
+const ImpulseIrradiance* ImpulseIrradianceCache::node(int g_index, int albedo_index,
+                                                      int last_bounce) const {
+    const uint64_t key = (uint64_t(uint32_t(g_index + 1024)) << 24) |
+                         (uint64_t(uint32_t(albedo_index)) << 8) | uint64_t(last_bounce & 0xff);
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = nodes_.find(key);
+    if (it != nodes_.end()) return it->second.get();
+    auto built = std::make_unique<const ImpulseIrradiance>(
+        tables_, blend_node_g(g_index), blend_node_albedo(albedo_index), last_bounce);
+    return nodes_.emplace(key, std::move(built)).first->second.get();
+}
+
+size_t ImpulseIrradianceCache::blend_nodes() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return nodes_.size();
+}
+
+ImpulseIrradianceBlend ImpulseIrradianceCache::blend(double g, double albedo,
+                                                     int last_bounce) const {
+    // The cell: g nodes g0 < g1 (their positions clamped to the tables' range, where the end
+    // cell is narrower: linear in the coordinate between the clamped nodes), albedo nodes k,
+    // k + 1.
+    const double u = blend_g_coordinate(std::clamp(g, -kGRange, kGRange));
+    const int gi = int(std::floor(u));
+    const double u0 = blend_g_coordinate(blend_node_g(gi));
+    const double u1 = blend_g_coordinate(blend_node_g(gi + 1));
+    const double fg = u1 > u0 ? std::clamp((u - u0) / (u1 - u0), 0.0, 1.0) : 0.0;
+    const double v = blend_coordinate(std::clamp(albedo, 0.0, 1.0));
+    const int ai = std::min(int(std::floor(v)), kBlendAlbedoNodes - 2);
+    const double fa = std::clamp(v - ai, 0.0, 1.0);
+    // The last cell's four tables per thread: consecutive mixture segments mostly share it.
+    thread_local struct {
+        uint64_t owner = 0;
+        int gi = 0, ai = 0, last_bounce = -1;
+        const ImpulseIrradiance* t[4] = {};
+    } last;
+    if (!(last.owner == id_ && last.gi == gi && last.ai == ai && last.last_bounce == last_bounce)) {
+        for (int c = 0; c < 4; ++c) last.t[c] = node(gi + (c & 1), ai + (c >> 1), last_bounce);
+        last.owner = id_;
+        last.gi = gi;
+        last.ai = ai;
+        last.last_bounce = last_bounce;
+    }
+    ImpulseIrradianceBlend b;
+    for (int c = 0; c < 4; ++c) {
+        const double w = ((c & 1) ? fg : 1.0 - fg) * ((c >> 1) ? fa : 1.0 - fa);
+        if (w == 0.0) continue;
+        b.table[b.count] = last.t[c];
+        b.weight[b.count] = w;
+        ++b.count;
+    }
+    return b;
+}
+
 }  // namespace freqlab

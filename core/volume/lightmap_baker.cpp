@@ -25,6 +25,7 @@ nlohmann::json BakeStats::to_json() const {
             {"vertex_correction_straddling_texels", correction_straddling},
             {"rays", rays},
             {"impulse_queries", impulse_queries},
+            {"impulse_mixture_tables", mixture_tables},
             {"nonfinite", guarded},
             {"texels_total", texels_total},
             {"texels_valid", texels_valid},
@@ -205,6 +206,7 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
     stats_.impulse_queries += queries;
     stats_.guarded += guarded;
     stats_.bake_ms += ms_since(t0);
+    stats_.mixture_tables = long(estimator_.mixture_tables());
     // What the bake holds: the atlases' texels and per-texel sums, probes and the correction
     // field's texels (the scene, Embree's BVH and the tables are the process's, in peak_rss_mb).
     size_t bytes = probe_sums_.size() * sizeof(BakeEstimator::ProbeParts);

@@ -31,6 +31,9 @@ struct BakeStats {
     long correction_texels = 0;      // texels whose prepass ran
     long correction_straddling = 0;  // field texels crossed by geometry (lookups test them)
     long rays = 0, impulse_queries = 0, guarded = 0;
+    // Impulse: node tables built for segments through several media (this process's,
+    // ImpulseIrradianceCache::blend; not summed across a cluster's ranks).
+    long mixture_tables = 0;
     long texels_valid = 0, texels_invalid = 0, texels_total = 0;
     int samples = 0;
     double storage_mb = 0.0;   // the bake's own arrays (atlases, sums, probes)

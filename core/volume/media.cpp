@@ -304,7 +304,9 @@ double times(double a, double b) {
 // A medium's share of a segment's optics from the integral of its (unscaled) density.
 void add_medium(const MediumDesc& m, double density_length, SegmentOptics& s) {
     const double scaled = times(density_length, m.density_scale);
-    s.tau_s += times(m.sigma_s, scaled);
+    const double tau_s = times(m.sigma_s, scaled);
+    if (tau_s > 0.0) ++s.scattering_media;
+    s.tau_s += tau_s;
     s.tau_a += times(m.sigma_a, scaled);
     s.tau_gs += times(m.g * m.sigma_s, scaled);
 }

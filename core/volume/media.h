@@ -77,6 +77,9 @@ struct SegmentOptics {
     double length = 0.0;
     double tau_s = 0.0, tau_a = 0.0;
     double tau_gs = 0.0;  // integral of g sigma_s
+    // How many media scatter along it: more than one is a mixture, whose effective g and
+    // albedo vary continuously (impulse_irradiance.h: ImpulseIrradianceCache::blend).
+    int scattering_media = 0;
     // Ratio tracking (Media::track): the optical thickness of the media integrated exactly and
     // the ratio-tracking estimate of the others' transmittance; NaN: everything exact.
     double tau_t_exact = std::numeric_limits<double>::quiet_NaN();

@@ -191,11 +191,19 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
     std::vector<EmitterSample> emitters;
     sample_emitters(p, rng, emitters);
     BakeCounters counters;
+    // As the estimator: below the horizon the receiver's own surface occludes the segment.
+    std::vector<OccludedConnection> connections(emitters.size());
+    for (size_t i = 0; i < emitters.size(); ++i) {
+        const EmitterSample& s = emitters[i];
+        connections[i].occluded =
+            !(!s.behind && glm::dot(n, s.dir) > 0.0f && visible(p, n, s.dir, s.distance, counters));
+    }
+    // The roulette of the texel's Monte Carlo terms on the paths that run them.
+    const std::vector<float> keep = mc_keep(emitters, connections, n);
     for (size_t i = 0; i < emitters.size(); ++i) {
         const EmitterSample& s = emitters[i];
         const float cos_x = glm::dot(n, s.dir);
-        // As the estimator: below the horizon the receiver's own surface occludes the segment.
-        const bool vis = !s.behind && cos_x > 0.0f && visible(p, n, s.dir, s.distance, counters);
+        const bool vis = !connections[i].occluded;
         const double length =
             std::isfinite(s.distance) ? s.distance : media_.exit_distance(p, s.dir);
         const SegmentOptics o = media_.integrate(p, s.dir, length);
@@ -213,6 +221,11 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
             m.sigma_a, m.g);
         line("  direct irradiance %.5g (x T for extinction, impulse and vpt)",
              double(luminance(s.irradiance)) * std::max(0.0f, cos_x));
+        if (scatters_ && has_mc_term(s, connections[i], n))
+            line(
+                "  Monte Carlo terms: strength %.4g, kept with probability %.3f "
+                "(bake.mc_emitter_budget %.3g)",
+                double(emitter_strength(s)), double(keep[i]), double(settings_.mc_emitter_budget));
         if (!vis && scatters_) trace_occluded(s, p, n, albedo, rng, line);
         if (!tables_ || !(m.sigma_s > 0.0) || !vis) continue;
         ImpulseQuery q;
