@@ -57,6 +57,9 @@ shot bake_zh_lobes.png scenes/cornell_fog.json --method impulse --set bake.spp=1
 # The Method B tables panel in a bake session, its sliders on the scene's fog.
 shot bake_tables_panel.png scenes/cornell_fog.json --method impulse --set bake.spp=64 \
      --set frame.width=480 --set frame.height=360 --tables
+# The production scene (issue "Method B, part 4"): its lightmapped preview, impulse | VPT.
+shot bake_valley_split_vpt.png scenes/valley.json --method impulse --set bake.quality=low \
+     --set bake.texel_density=1 --set frame.width=640 --set frame.height=400 --compare
 shot bake_split_vpt.png scenes/cornell_fog.json --method impulse --set bake.spp=64 \
      --set frame.width=480 --set frame.height=360 --compare
 # Method B, light scattered into shadows: an umbra texel's trace (the lit medium's visibility and

@@ -76,6 +76,8 @@ BakeEstimator::BakeEstimator(const RayScene& scene, const Media& media, const Im
         if (settings.tabulated_irradiance)
             irradiance_ = std::make_unique<ImpulseIrradianceCache>(*tables);
     }
+    for (const Light& light : scene.scene().lights)
+        if (light.type == LightType::Point) ++point_lights_;
     attenuates_ = method != BakeMethod::Surface && !media.empty();
     scatters_ = method == BakeMethod::Impulse && !media.empty();
     zh_clamped_cosine(kImpulseOrder, cosine_zh_);
@@ -1017,8 +1019,10 @@ vec3 BakeEstimator::point_lights_along(const vec3& o, const vec3& d, double t_ma
     // (I / h) x the angle it subtends (what equiangular sampling draws from).
     thread_local std::vector<float> strength, keep;
     strength.clear();
+    keep.clear();
+    const bool roulette = point_lights_ > 1 && settings_.mc_emitter_budget > 0.0f;
     for (const Light& light : lights) {
-        if (light.type != LightType::Point) continue;
+        if (!roulette || light.type != LightType::Point) continue;
         float st = 0.0f;
         if (t_end > 0.0 && std::isfinite(t_end)) {
             const glm::dvec3 oc = glm::dvec3(light.position) - glm::dvec3(o);
@@ -1029,11 +1033,11 @@ vec3 BakeEstimator::point_lights_along(const vec3& o, const vec3& d, double t_ma
         }
         strength.push_back(st);
     }
-    emitter_keep_probabilities(strength, settings_.mc_emitter_budget, keep);
+    if (roulette) emitter_keep_probabilities(strength, settings_.mc_emitter_budget, keep);
     size_t k = 0;
     for (const Light& light : lights) {
         if (light.type != LightType::Point) continue;
-        const float keep_k = keep[k++];
+        const float keep_k = roulette ? keep[k++] : 1.0f;
         const float u = rng.next_float();  // drawn for every point light: streams stay aligned
         if (!(t_end > 0.0)) continue;
         // Equiangular sampling: the 1/r^2 of the light along the segment.

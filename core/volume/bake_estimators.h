@@ -404,6 +404,7 @@ class BakeEstimator {
     const VertexCorrectionField* corrections_ = nullptr;
     int prepass_surface_depth_ = -1;
     std::unique_ptr<ImpulseIrradianceCache> irradiance_;  // impulse: tabulated double products
+    int point_lights_ = 0;  // the scene's (their roulette needs two or more)
     // Scenes with one medium: its table and the Media::version() it was resolved at.
     mutable std::atomic<const ImpulseIrradiance*> single_table_{nullptr};
     mutable std::atomic<uint64_t> single_version_{~uint64_t(0)};

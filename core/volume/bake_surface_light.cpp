@@ -72,16 +72,18 @@ vec3 BakeEstimator::point_lit_surface_light(const WalkScatter& at, CounterRng& r
     // The roulette (emitter_roulette.h) on each light's strength at x, I / |x - light|^2.
     thread_local std::vector<float> strength, keep;
     strength.clear();
+    keep.clear();
+    const bool roulette = point_lights_ > 1 && settings_.mc_emitter_budget > 0.0f;
     for (const Light& light : lights)
-        if (light.type == LightType::Point) {
+        if (roulette && light.type == LightType::Point) {
             const vec3 to = light.position - at.x;
             strength.push_back(luminance(light.intensity) / std::max(glm::dot(to, to), 1e-12f));
         }
-    emitter_keep_probabilities(strength, settings_.mc_emitter_budget, keep);
+    if (roulette) emitter_keep_probabilities(strength, settings_.mc_emitter_budget, keep);
     size_t k = 0;
     for (const Light& light : lights) {
         if (light.type != LightType::Point) continue;
-        const float keep_k = keep[k++];
+        const float keep_k = roulette ? keep[k++] : 1.0f;
         // Drawn for every point light: streams stay aligned.
         const float u1 = rng.next_float(), u2 = rng.next_float();
         const float roulette = emitter_roulette_weight(keep_k, rng);

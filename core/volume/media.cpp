@@ -316,7 +316,23 @@ void add_medium(const MediumDesc& m, double density_length, SegmentOptics& s) {
 SegmentOptics Media::integrate(const vec3& o, const vec3& d, double t_max) const {
     SegmentOptics s;
     double exit = 0.0;
+    // A finite segment's bounds first: most of a scene's boxes (valley's ten smoke volumes)
+    // lie off a segment, and six comparisons reject them before the slab test's divisions.
+    const bool bounded = media_.size() > 1 && std::isfinite(t_max);
+    vec3 lo(0.0f), hi(0.0f);
+    if (bounded) {
+        const vec3 end = o + d * float(t_max);
+        // Padded by the float rounding of `end` (the slab test runs in double).
+        const vec3 ao = glm::abs(o);
+        const float pad = 1e-5f * (std::max({ao.x, ao.y, ao.z}) + float(t_max) + 1.0f);
+        lo = glm::min(o, end) - pad;
+        hi = glm::max(o, end) + pad;
+    }
     for (const Entry& e : media_) {
+        if (bounded && e.desc.bounds == MediumBounds::Box &&
+            (glm::any(glm::lessThan(hi, e.desc.box_min)) ||
+             glm::any(glm::greaterThan(lo, e.desc.box_max))))
+            continue;
         double t0, t1;
         if (!clip(e, o, d, t_max, &t0, &t1)) continue;
         exit = std::max(exit, t1);
