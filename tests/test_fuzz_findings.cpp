@@ -52,6 +52,14 @@ void write_bytes(const fs::path& p, const std::string& bytes) {
     std::ofstream(p, std::ios::binary) << bytes;
 }
 
+// A valid 4 x 2 colour EXR written at p, as bytes to damage.
+std::string small_exr_bytes(const fs::path& p) {
+    LayerSet layers(4, 2);
+    layers.add("color", LayerKind::Color, 3);
+    write_exr(p, layers);
+    return read_bytes(p);
+}
+
 }  // namespace
 
 // nlohmann's const operator[] past an array's end is undefined (fuzz_session: "range": []).
@@ -108,10 +116,7 @@ TEST(FuzzFindings, SessionFileRoundTripsAndRefusesBadFieldsByName) {
 // An EXR attribute declaring 1.8 GB in a 600-byte file: OpenEXR allocated it (fuzz_env_exr).
 TEST(FuzzFindings, ExrAttributeLargerThanTheFileIsRefused) {
     const fs::path p = temp_file("attribute.exr");
-    LayerSet layers(4, 2);
-    layers.add("color", LayerKind::Color, 3);
-    write_exr(p, layers);
-    std::string bytes = read_bytes(p);
+    std::string bytes = small_exr_bytes(p);
     const size_t at = bytes.find("channels");
     ASSERT_NE(at, std::string::npos);
     const size_t size_at = at + std::strlen("channels") + 1 + std::strlen("chlist") + 1;
@@ -133,10 +138,7 @@ TEST(FuzzFindings, ExrAttributeLargerThanTheFileIsRefused) {
 // The walk refuses such a header by name; a file OpenEXR wrote still reads.
 TEST(FuzzFindings, ExrValueSizesMustBeTheTypesOwn) {
     const fs::path p = temp_file("chlist.exr");
-    LayerSet layers(4, 2);
-    layers.add("color", LayerKind::Color, 3);
-    write_exr(p, layers);
-    const std::string valid = read_bytes(p);
+    const std::string valid = small_exr_bytes(p);
     EXPECT_EQ(read_rgb_image(p).width, 4);
     const size_t at = valid.find("channels");
     ASSERT_NE(at, std::string::npos);
@@ -290,10 +292,7 @@ TEST(FuzzFindings, VdbDeclaringMoreThanItHoldsIsRefusedBeforeAllocating) {
 // allocation before any check of ours ran. The header walk now refuses it, naming the field.
 TEST(FuzzFindings, ExrDataWindowIsCheckedBeforeOpenExrSizesBuffers) {
     const fs::path p = temp_file("window.exr");
-    LayerSet layers(4, 2);
-    layers.add("color", LayerKind::Color, 3);
-    write_exr(p, layers);
-    const std::string valid = read_bytes(p);
+    const std::string valid = small_exr_bytes(p);
     const size_t at = valid.find("dataWindow");
     ASSERT_NE(at, std::string::npos);
     const size_t value_at = at + std::strlen("dataWindow") + 1 + std::strlen("box2i") + 1 + 4;
@@ -326,10 +325,7 @@ TEST(FuzzFindings, ExrAttributeNamedTwiceIsRefused) {
     EXPECT_NE(e.message().find("appears twice"), std::string::npos) << e.what();
     // Built by hand too: a valid file with its dataWindow attribute repeated.
     const fs::path p = temp_file("twice.exr");
-    LayerSet layers(4, 2);
-    layers.add("color", LayerKind::Color, 3);
-    write_exr(p, layers);
-    std::string bytes = read_bytes(p);
+    std::string bytes = small_exr_bytes(p);
     const size_t at = bytes.find("dataWindow");
     ASSERT_NE(at, std::string::npos);
     const size_t length = std::strlen("dataWindow") + 1 + std::strlen("box2i") + 1 + 4 + 16;

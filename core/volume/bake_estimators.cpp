@@ -424,17 +424,18 @@ float BakeEstimator::emitter_strength(const EmitterSample& s) {
     return float(double(luminance(s.intensity)) / d2);
 }
 
-template <class Gathered>
-void BakeEstimator::event_keep(const std::vector<EmitterSample>& emitters, Gathered gathered,
-                               std::vector<float>& keep) const {
+template <class Has>
+void BakeEstimator::emitter_keep(const std::vector<EmitterSample>& emitters, Has has,
+                                 std::vector<float>& keep) const {
     thread_local std::vector<float> strength;
     strength.assign(emitters.size(), 0.0f);
     size_t count = 0;
     for (size_t i = 0; i < emitters.size(); ++i)
-        if (gathered(emitters[i])) {
+        if (has(i)) {
             strength[i] = emitter_strength(emitters[i]);
             ++count;
         }
+    // One emitter with a term is kept for sure, whatever the others (which have none).
     emitter_keep_probabilities(strength, count > 1 ? settings_.mc_emitter_budget : 0.0f, keep);
 }
 
@@ -446,15 +447,11 @@ bool BakeEstimator::has_mc_term(const EmitterSample& s, const OccludedConnection
 std::vector<float> BakeEstimator::mc_keep(const std::vector<EmitterSample>& emitters,
                                           const std::vector<OccludedConnection>& occluded,
                                           const vec3& n) const {
-    std::vector<float> strength(emitters.size(), 0.0f), keep;
-    size_t terms = 0;
-    for (size_t i = 0; i < emitters.size() && i < occluded.size(); ++i)
-        if (has_mc_term(emitters[i], occluded[i], n)) {
-            strength[i] = emitter_strength(emitters[i]);
-            ++terms;
-        }
-    // One emitter with a term is kept for sure, whatever the others (which have none).
-    emitter_keep_probabilities(strength, terms > 1 ? settings_.mc_emitter_budget : 0.0f, keep);
+    std::vector<float> keep;
+    emitter_keep(
+        emitters,
+        [&](size_t i) { return i < occluded.size() && has_mc_term(emitters[i], occluded[i], n); },
+        keep);
     return keep;
 }
 
@@ -1017,27 +1014,21 @@ vec3 BakeEstimator::point_lights_along(const vec3& o, const vec3& d, double t_ma
     const std::vector<Light>& lights = scene_.scene().lights;
     // The roulette's strength of each point light: the integral of I / r^2 along the segment,
     // (I / h) x the angle it subtends (what equiangular sampling draws from).
-    thread_local std::vector<float> strength, keep;
-    strength.clear();
-    keep.clear();
-    const bool roulette = point_lights_ > 1 && settings_.mc_emitter_budget > 0.0f;
-    for (const Light& light : lights) {
-        if (!roulette || light.type != LightType::Point) continue;
-        float st = 0.0f;
-        if (t_end > 0.0 && std::isfinite(t_end)) {
+    thread_local std::vector<float> keep;
+    point_light_keep(
+        [&](const Light& light) {
+            if (!(t_end > 0.0) || !std::isfinite(t_end)) return 0.0f;
             const glm::dvec3 oc = glm::dvec3(light.position) - glm::dvec3(o);
             const double delta = glm::dot(oc, glm::dvec3(d));
             const double h = std::max(glm::length(oc - delta * glm::dvec3(d)), 1e-9);
-            st = float(double(luminance(light.intensity)) / h *
-                       (std::atan((t_end - delta) / h) - std::atan(-delta / h)));
-        }
-        strength.push_back(st);
-    }
-    if (roulette) emitter_keep_probabilities(strength, settings_.mc_emitter_budget, keep);
+            return float(double(luminance(light.intensity)) / h *
+                         (std::atan((t_end - delta) / h) - std::atan(-delta / h)));
+        },
+        keep);
     size_t k = 0;
     for (const Light& light : lights) {
         if (light.type != LightType::Point) continue;
-        const float keep_k = roulette ? keep[k++] : 1.0f;
+        const float keep_k = keep.empty() ? 1.0f : keep[k++];
         const float u = rng.next_float();  // drawn for every point light: streams stay aligned
         if (!(t_end > 0.0)) continue;
         // Equiangular sampling: the 1/r^2 of the light along the segment.
@@ -1179,7 +1170,8 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
             auto gathered = [](const EmitterSample& s) {
                 return s.kind != EmitterKind::Point && !s.behind;
             };
-            event_keep(emitters, gathered, keep);
+            emitter_keep(
+                emitters, [&](size_t i) { return gathered(emitters[i]); }, keep);
             for (size_t i = 0; i < emitters.size(); ++i) {
                 const EmitterSample& s = emitters[i];
                 if (!gathered(s)) continue;

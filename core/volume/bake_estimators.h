@@ -38,6 +38,7 @@
 #include "base/enum_names.h"
 #include "math/rng.h"
 #include "settings/bake_settings.h"
+#include "volume/emitter_roulette.h"
 #include "volume/impulse_irradiance.h"
 #include "volume/impulse_query.h"
 #include "volume/media.h"
@@ -287,10 +288,22 @@ class BakeEstimator {
     // emitter's keep probability at a vertex (1 for a vertex with one term).
     static float emitter_strength(const EmitterSample& s);
     bool has_mc_term(const EmitterSample& s, const OccludedConnection& c, const vec3& n) const;
-    // The same at a walk's scattering event, over the emitters gathered(s) picks.
-    template <class Gathered>
-    void event_keep(const std::vector<EmitterSample>& emitters, Gathered gathered,
-                    std::vector<float>& keep) const;
+    // Each emitter's keep probability over those has(i) picks (the rest keep 1).
+    template <class Has>
+    void emitter_keep(const std::vector<EmitterSample>& emitters, Has has,
+                      std::vector<float>& keep) const;
+    // Each point light's keep probability from strength_of(light), in scene order; empty
+    // (every light kept, no number drawn) with fewer than two point lights or budget 0.
+    template <class Strength>
+    void point_light_keep(Strength strength_of, std::vector<float>& keep) const {
+        keep.clear();
+        if (point_lights_ < 2 || !(settings_.mc_emitter_budget > 0.0f)) return;
+        thread_local std::vector<float> strength;
+        strength.clear();
+        for (const Light& light : scene_.scene().lights)
+            if (light.type == LightType::Point) strength.push_back(strength_of(light));
+        emitter_keep_probabilities(strength, settings_.mc_emitter_budget, keep);
+    }
     std::vector<float> mc_keep(const std::vector<EmitterSample>& emitters,
                                const std::vector<OccludedConnection>& occluded,
                                const vec3& n) const;

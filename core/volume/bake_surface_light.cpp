@@ -24,7 +24,6 @@
 #include <cmath>
 
 #include "volume/bake_estimators.h"
-#include "volume/emitter_roulette.h"
 
 namespace freqlab {
 
@@ -70,20 +69,17 @@ vec3 BakeEstimator::point_lit_surface_light(const WalkScatter& at, CounterRng& r
     vec3 sum(0.0f);
     const std::vector<Light>& lights = scene_.scene().lights;
     // The roulette (emitter_roulette.h) on each light's strength at x, I / |x - light|^2.
-    thread_local std::vector<float> strength, keep;
-    strength.clear();
-    keep.clear();
-    const bool roulette = point_lights_ > 1 && settings_.mc_emitter_budget > 0.0f;
-    for (const Light& light : lights)
-        if (roulette && light.type == LightType::Point) {
+    thread_local std::vector<float> keep;
+    point_light_keep(
+        [&](const Light& light) {
             const vec3 to = light.position - at.x;
-            strength.push_back(luminance(light.intensity) / std::max(glm::dot(to, to), 1e-12f));
-        }
-    if (roulette) emitter_keep_probabilities(strength, settings_.mc_emitter_budget, keep);
+            return luminance(light.intensity) / std::max(glm::dot(to, to), 1e-12f);
+        },
+        keep);
     size_t k = 0;
     for (const Light& light : lights) {
         if (light.type != LightType::Point) continue;
-        const float keep_k = roulette ? keep[k++] : 1.0f;
+        const float keep_k = keep.empty() ? 1.0f : keep[k++];
         // Drawn for every point light: streams stay aligned.
         const float u1 = rng.next_float(), u2 = rng.next_float();
         const float roulette = emitter_roulette_weight(keep_k, rng);

@@ -196,7 +196,7 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
     for (size_t i = 0; i < emitters.size(); ++i) {
         const EmitterSample& s = emitters[i];
         connections[i].occluded =
-            !(!s.behind && glm::dot(n, s.dir) > 0.0f && visible(p, n, s.dir, s.distance, counters));
+            s.behind || glm::dot(n, s.dir) <= 0.0f || !visible(p, n, s.dir, s.distance, counters);
     }
     // The roulette of the texel's Monte Carlo terms on the paths that run them.
     const std::vector<float> keep = mc_keep(emitters, connections, n);
