@@ -39,9 +39,20 @@ json error_against(const fs::path& reference_dir, const std::string& name, const
     for (const char* layer : {"lm_irradiance", "lm_total", "lm_surface", "lm_inscatter_single",
                               "lm_inscatter_multiple"}) {
         if (!ref.layers.find(layer) || !test.find(layer)) continue;
-        const LightmapError e = compare_lightmaps(test, ref.layers, layer);
-        out[layer] = {
-            {"relmse", e.relmse}, {"rmse", e.rmse}, {"rel_l2", e.rel_l2}, {"texels", e.texels}};
+        constexpr size_t kWorstTexels = 8;
+        const LightmapError e = compare_lightmaps(test, ref.layers, layer, nullptr, kWorstTexels);
+        json worst = json::array();
+        for (const TexelError& t : e.worst)
+            worst.push_back({{"x", t.x},
+                             {"y", t.y},
+                             {"luminance", t.test},
+                             {"reference_luminance", t.ref},
+                             {"relmse_share", t.relmse_share}});
+        out[layer] = {{"relmse", e.relmse},
+                      {"rmse", e.rmse},
+                      {"rel_l2", e.rel_l2},
+                      {"texels", e.texels},
+                      {"worst_texels", worst}};
     }
     if (ref.layers.find("lm_inscatter_single") && test.find("lm_inscatter_single")) {
         const RegionComparison c = compare_region(test, ref.layers, shadowed);

@@ -145,3 +145,38 @@ TEST(LightmapMeasures, OnlyValidTexelsCount) {
     EXPECT_EQ(e.texels, 1);
     EXPECT_NEAR(e.relmse, 1.0, 1e-5);  // (2 - 1)^2 / 1^2 at the one valid texel
 }
+
+// The worst texels are those whose terms weigh most in relMSE, largest first, with their
+// positions and shares: a near-black reference texel weighs ~1 / e^2 and rules the measure.
+TEST(LightmapMeasures, WorstTexelsAreTheLargestRelMseTerms) {
+    const int w = 8, h = 4;
+    LayerSet lm(w, h), ref(w, h);
+    for (LayerSet* set : {&lm, &ref}) {
+        Layer& valid = set->add("texel_valid", LayerKind::Categorical, 1);
+        std::fill(valid.data.begin(), valid.data.end(), float(TexelState::Valid));
+    }
+    Layer& a = lm.add("lm_irradiance", LayerKind::Color, 3);
+    Layer& b = ref.add("lm_irradiance", LayerKind::Color, 3);
+    std::fill(a.data.begin(), a.data.end(), 1.0f);
+    std::fill(b.data.begin(), b.data.end(), 1.0f);
+    const size_t dark = 3 * w + 5, brighter = 1 * w + 2;  // (5, 3) and (2, 1)
+    for (int c = 0; c < 3; ++c) {
+        b.data[3 * dark + size_t(c)] = 0.0f;      // the reference sees no light here
+        a.data[3 * dark + size_t(c)] = 0.01f;     // a little: (0.01 / e)^2 per channel
+        a.data[3 * brighter + size_t(c)] = 1.5f;  // 50 % too bright: 0.25 per channel
+    }
+    const LightmapError e = compare_lightmaps(lm, ref, "lm_irradiance", nullptr, 3);
+    ASSERT_EQ(e.worst.size(), 3u);
+    EXPECT_EQ(e.worst[0].x, 5);
+    EXPECT_EQ(e.worst[0].y, 3);
+    EXPECT_FLOAT_EQ(float(e.worst[0].ref), 0.0f);
+    EXPECT_NEAR(e.worst[0].test, 0.01, 1e-6);
+    EXPECT_EQ(e.worst[1].x, 2);
+    EXPECT_EQ(e.worst[1].y, 1);
+    EXPECT_DOUBLE_EQ(e.worst[2].relmse_share, 0.0);
+    // e = 1e-3 x the reference's mean (31 / 32): the dark texel's term over all of them.
+    const double eps = 1e-3 * 31.0 / 32.0;
+    const double dark_term = 3 * 1e-4 / (eps * eps), bright_term = 3 * 0.25;
+    EXPECT_NEAR(e.worst[0].relmse_share, dark_term / (dark_term + bright_term), 1e-5);
+    EXPECT_NEAR(e.relmse, (dark_term + bright_term) / (3.0 * w * h), 1e-3);
+}

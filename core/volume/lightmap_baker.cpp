@@ -439,7 +439,7 @@ double valid_texel_luminance_sum(const LayerSet& lightmap, const std::string& la
 }
 
 LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref, const std::string& layer,
-                                const std::vector<uint8_t>* only) {
+                                const std::vector<uint8_t>* only, size_t worst) {
     if (test.width() != ref.width() || test.height() != ref.height())
         throw Error("", layer,
                     "lightmap sizes differ: " + std::to_string(test.width()) + "x" +
@@ -463,17 +463,34 @@ LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref, const
     const double eps = kLightmapRelMseEpsilonOfMean * mean_ref;
     const double eps2 = eps * eps + 1e-30;
     double rel = 0.0, sq = 0.0, ref2 = 0.0;
+    std::vector<std::pair<double, size_t>> terms;  // (the texel's relmse term, texel)
     for (size_t i = 0; i < ref.pixel_count(); ++i) {
         if (!measured(valid, only, i)) continue;
+        double texel_rel = 0.0;
         for (int c = 0; c < ch; ++c) {
             const double r = b.data[i * b.channels + c], t = a.data[i * a.channels + c];
-            rel += (t - r) * (t - r) / (r * r + eps2);
+            texel_rel += (t - r) * (t - r) / (r * r + eps2);
             sq += (t - r) * (t - r);
             ref2 += r * r;
         }
+        rel += texel_rel;
+        if (worst > 0) terms.emplace_back(texel_rel, i);
     }
     const double n = double(e.texels) * ch;
     e.relmse = rel / n;
+    const size_t listed = std::min(worst, terms.size());
+    std::partial_sort(terms.begin(), terms.begin() + long(listed), terms.end(),
+                      [](const auto& p, const auto& q) { return p.first > q.first; });
+    const auto lum = [](const Layer& l, size_t i) {
+        return l.channels == 3
+                   ? luminance(vec3(l.data[3 * i], l.data[3 * i + 1], l.data[3 * i + 2]))
+                   : l.data[i * l.channels];
+    };
+    for (size_t k = 0; k < listed; ++k) {
+        const size_t i = terms[k].second;
+        e.worst.push_back({int(i % ref.width()), int(i / ref.width()), lum(a, i), lum(b, i),
+                           rel > 0.0 ? terms[k].first / rel : 0.0});
+    }
     e.rmse = std::sqrt(sq / n);
     e.rel_l2 = ref2 > 0.0 ? std::sqrt(sq / ref2) : 0.0;
     return e;

@@ -143,14 +143,22 @@ namespace freqlab {
 // reference's valid texels only (gutters and flagged texels would dilute it):
 // relmse = mean over texels and channels of (I - R)^2 / (R^2 + e^2), e = 1e-3 x mean(R), so
 // the measure does not depend on the light's units; rmse likewise; rel_l2 = |I - R| / |R|.
+// `worst` lists the texels whose terms weigh most in relmse, largest first: where a relMSE
+// ruled by a few texels lives (near-black reference texels weigh up to 1 / e^2).
+struct TexelError {
+    int x = 0, y = 0;
+    double test = 0.0, ref = 0.0;  // luminance
+    double relmse_share = 0.0;     // the texel's part of relmse (all shares sum to 1)
+};
 struct LightmapError {
     double relmse = 0.0, rmse = 0.0, rel_l2 = 0.0;
     long texels = 0;
+    std::vector<TexelError> worst;
 };
 // Throws Error when sizes differ or a layer is missing. `only` (one flag per texel), when
 // given, restricts the measure to the flagged valid texels (shadowed_texels.h).
 LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref, const std::string& layer,
-                                const std::vector<uint8_t>* only = nullptr);
+                                const std::vector<uint8_t>* only = nullptr, size_t worst = 0);
 // The luminance of an RGB layer summed over the lightmap's valid texels (the texels
 // compare_lightmaps measures; `only` as there); throws Error when a layer is missing.
 double valid_texel_luminance_sum(const LayerSet& lightmap, const std::string& layer,
