@@ -320,14 +320,14 @@ const ImpulseIrradiance* BakeEstimator::irradiance_table(double g, double albedo
 
 IrradianceParts BakeEstimator::estimate(const vec3& p, const vec3& n, const vec3& albedo,
                                         CounterRng& rng, BakeCounters& counters, FixedDirect* fixed,
-                                        IrradianceParts* deferred) const {
+                                        IrradianceParts* deferred, float mc_rate) const {
     const bool reuse = fixed && settings_.tracking == Tracking::Exact;
     IrradianceParts later;
     IrradianceParts parts =
         method_ == BakeMethod::Vpt
             ? volume_path(p, n, rng, counters)
             : surface_path(p, n, albedo, 0, rng, counters, reuse ? fixed : nullptr,
-                           deferred ? &later : nullptr);
+                           deferred ? &later : nullptr, false, mc_rate);
     if (!finite(parts.total()) || !finite(later.total())) {
         ++counters.guarded;
         return {};
@@ -455,17 +455,22 @@ std::vector<float> BakeEstimator::mc_keep(const std::vector<EmitterSample>& emit
     return keep;
 }
 
-BakeEstimator::MediumPoint BakeEstimator::draw_medium_point(const vec3& p, const vec3& n,
-                                                            const vec3* emitter, CounterRng& rng,
-                                                            BakeCounters& counters,
-                                                            bool whole_ray) const {
+BakeEstimator::MediumPoint BakeEstimator::draw_medium_point(
+    const vec3& p, const vec3& n, const vec3* emitter, CounterRng& rng, BakeCounters& counters,
+    bool whole_ray, const ReceiverDirections* directions) const {
     MediumPoint m;
     // Three numbers whatever happens: the streams of later vertices stay aligned.
     const float u1 = rng.next_float(), u2 = rng.next_float();
     const double u3 = rng.next_double();
-    const vec3 local_dir = sample_cosine_hemisphere(u1, u2);
-    if (local_dir.z <= 1e-6f) return m;
-    m.w = Frame(n).to_world(local_dir);
+    if (directions) {
+        vec3 w;
+        if (!directions->sample(u1, u2, &w, &m.direction_weight)) return m;
+        m.w = w;
+    } else {
+        const vec3 local_dir = sample_cosine_hemisphere(u1, u2);
+        if (local_dir.z <= 1e-6f) return m;
+        m.w = Frame(n).to_world(local_dir);
+    }
     m.o = origin(p, n);
     // The part of w's ray that can scatter: to the media's exit or, in a medium filling all
     // space, to the first surface (then nothing lies between p and the point).
@@ -723,29 +728,22 @@ vec3 BakeEstimator::single_correction(const EmitterSample& s, const vec3& p, con
     if (!std::isfinite(depth)) return vec3(0.0f);  // a medium filling space: the sun is dark
     const SegmentOptics optics =
         depth > 0.0 ? segment_optics(p, s.dir, depth, rng) : SegmentOptics{};
-    HomogeneousMedium model =
+    HomogeneousMedium medium =
         optics.tau_s > 0.0 ? optics.effective() : HomogeneousMedium{0.0, 0.0, 0.0};
-    if (model.sigma_t() * depth > ZhDistanceTable::kMaxD) model = HomogeneousMedium{0.0, 0.0, 0.0};
-    const double g_model = model.g;
-    const MediumPoint m = draw_medium_point(p, n, nullptr, rng, counters);
+    if (medium.sigma_t() * depth > ZhDistanceTable::kMaxD)
+        medium = HomogeneousMedium{0.0, 0.0, 0.0};
+    const HalfSpaceSingleModel model{medium.sigma_s, medium.sigma_t(), medium.g, depth};
+    // w in proportion to the model's radiance x cos: its part of the estimate is then nearly
+    // the same for every w (single_scatter_lobe.h).
+    const SingleScatterLobe lobe(model, s.dir, n);
+    const MediumPoint m = draw_medium_point(p, n, nullptr, rng, counters, false, &lobe);
     if (glm::length(m.w) == 0.0f) return vec3(0.0f);  // a grazing direction: measure zero
     const double wl = glm::dot(m.w, s.dir);
-    const double st = model.sigma_t();
-    const double k = st * (1.0 - wl);
-    const double t_boundary = wl > 1e-9 ? depth / wl : kInfinity;
-    const double base = model.sigma_s * hg_phase(g_model, wl) * std::exp(-st * depth);
-    // The model's integral over [a, b] along w, in closed form.
-    auto model_integral = [&](double a, double b) {
-        b = std::min(b, t_boundary);
-        if (!(a < b) || base == 0.0) return 0.0;
-        const double ea = std::exp(-k * a);
-        return base * (k > 1e-12 ? (ea - (std::isfinite(b) ? std::exp(-k * b) : 0.0)) / k : b - a);
-    };
     // Beyond the drawn part of the ray (the media's exit or the first surface) only the model
     // has medium.
-    double difference = -model_integral(m.t_end, kInfinity);
+    double difference = -model.integral(wl, m.t_end, kInfinity);
     if (m.pdf > 0.0) {
-        const double model_here = m.t < t_boundary ? base * std::exp(-k * m.t) / m.pdf : 0.0;
+        const double model_here = model.at(wl, m.t) / m.pdf;
         double real_here = 0.0;
         const EmitterSeen at = m.valid ? emitter_seen(s, vec3(0.0f), m.x) : EmitterSeen{};
         if (at.valid && sees_receiver(m, counters)) {
@@ -758,9 +756,9 @@ vec3 BakeEstimator::single_correction(const EmitterSample& s, const vec3& p, con
         difference += real_here - model_here;
     } else {
         // Nothing to draw from (no extinction along the ray): the real part is 0.
-        difference -= model_integral(0.0, m.t_end);
+        difference -= model.integral(wl, 0.0, m.t_end);
     }
-    return s.irradiance * float(kPiD * difference);
+    return s.irradiance * float(m.direction_weight * difference);
 }
 
 vec3 BakeEstimator::local_single_correction(const EmitterSample& s, const vec3& p, const vec3& n,
@@ -772,7 +770,9 @@ vec3 BakeEstimator::local_single_correction(const EmitterSample& s, const vec3& 
     // or the first surface.
     // An empty model where the tables brought nothing (as single_correction).
     const vec3 emitter = p + s.dir * float(s.distance);
-    const MediumPoint m = draw_medium_point(p, n, &emitter, rng, counters, true);
+    // w aims at the emitter as often as the cosine draws it (near_light_directions.h).
+    const CosineAndPointDirections directions(origin(p, n), n, emitter);
+    const MediumPoint m = draw_medium_point(p, n, &emitter, rng, counters, true, &directions);
     const SegmentOptics optics = segment_optics(p, s.dir, s.distance, rng);
     HomogeneousMedium model =
         optics.tau_s > 0.0 ? optics.effective() : HomogeneousMedium{0.0, 0.0, 0.0};
@@ -803,13 +803,13 @@ vec3 BakeEstimator::local_single_correction(const EmitterSample& s, const vec3& 
                                         media_.transmittance(m.x, at.l, at.to_emitter) / m.pdf);
         }
     }
-    return float(kPiD) * (real_here - s.intensity * float(model_here));
+    return float(m.direction_weight) * (real_here - s.intensity * float(model_here));
 }
 
 IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const vec3& albedo,
                                             int depth, CounterRng& rng, BakeCounters& counters,
                                             FixedDirect* fixed, IrradianceParts* deferred,
-                                            bool corrected) const {
+                                            bool corrected, float mc_rate) const {
     IrradianceParts parts;
     const float albedo_lum = luminance(albedo);
     // One buffer per path depth and thread: no allocation per vertex.
@@ -872,9 +872,10 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     // baker sums them apart and filters them over neighbouring texels (bake.texel_mc_radius).
     bool mc_here = lit_here;
     float mc_weight = 1.0f;
-    if (lit_here && settings_.texel_mc_rate < 1.0f) {
-        mc_here = rng.next_float() < settings_.texel_mc_rate;
-        mc_weight = 1.0f / settings_.texel_mc_rate;
+    const float rate = mc_rate > 0.0f ? mc_rate : settings_.texel_mc_rate;
+    if (lit_here && rate < 1.0f) {
+        mc_here = rng.next_float() < rate;
+        mc_weight = 1.0f / rate;
     }
     IrradianceParts mc;
     if (mc_here && !occluded.empty()) {

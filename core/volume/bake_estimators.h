@@ -43,6 +43,7 @@
 #include "volume/impulse_query.h"
 #include "volume/media.h"
 #include "volume/near_light_directions.h"
+#include "volume/single_scatter_lobe.h"
 
 namespace freqlab {
 
@@ -125,9 +126,11 @@ class BakeEstimator {
     // when given, is this point's FixedDirect, filled by the first call. `deferred`, when
     // given, receives the texel's Monte Carlo terms through the real media instead of the
     // result (the baker filters them over neighbouring texels; without it they are added).
+    // mc_rate > 0: the rate of the receiver's Monte Carlo terms instead of
+    // bake.texel_mc_rate (texel_filter.h's texel_mc_rates).
     IrradianceParts estimate(const vec3& p, const vec3& n, const vec3& albedo, CounterRng& rng,
                              BakeCounters& counters, FixedDirect* fixed = nullptr,
-                             IrradianceParts* deferred = nullptr) const;
+                             IrradianceParts* deferred = nullptr, float mc_rate = -1.0f) const;
 
     BakeMethod method() const { return method_; }
     const BakeSettings& settings() const { return settings_; }
@@ -170,6 +173,7 @@ class BakeEstimator {
         bool check_path = true;
         double t_end = 0.0;  // the drawn part of the ray: to the media's exit or first surface
         HomogeneousMedium here{0.0, 0.0, 0.0};
+        double direction_weight = 3.14159265358979323846;  // cos / pdf of w (pi: the cosine)
     };
     // Light of one emitter sample scattered into (p, n) by the lit medium around p, for a
     // connection the tables cannot take (occluded, or below the horizon): one point x_t drawn
@@ -217,9 +221,10 @@ class BakeEstimator {
     vec3 local_single_correction(const EmitterSample& s, const vec3& p, const vec3& n,
                                  CounterRng& rng, BakeCounters& counters) const;
     // whole_ray (with an emitter): t equiangular over [0, infinity); valid only before t_end.
+    // w by the cosine, or by `directions` (receiver_directions.h).
     MediumPoint draw_medium_point(const vec3& p, const vec3& n, const vec3* emitter,
-                                  CounterRng& rng, BakeCounters& counters,
-                                  bool whole_ray = false) const;
+                                  CounterRng& rng, BakeCounters& counters, bool whole_ray = false,
+                                  const ReceiverDirections* directions = nullptr) const;
     bool sees_receiver(const MediumPoint& m, BakeCounters& counters) const;
     // Light reflected by surfaces the receiver cannot see, scattered once in the medium in
     // front of it towards it: x by draw_medium_point, HG sampling at x to a surface y, y's
@@ -256,7 +261,7 @@ class BakeEstimator {
     IrradianceParts surface_path(const vec3& p, const vec3& n, const vec3& albedo, int depth,
                                  CounterRng& rng, BakeCounters& counters,
                                  FixedDirect* fixed = nullptr, IrradianceParts* deferred = nullptr,
-                                 bool corrected = false) const;
+                                 bool corrected = false, float mc_rate = -1.0f) const;
     // A surface vertex at depth `depth` reached by a ray (hit): its surface_path plus, when the
     // vertex correction field covers it, the field's value (added to the single part: it is
     // in-scattered light). What indirect segments and walks take as the vertex's irradiance.

@@ -144,6 +144,8 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
     long map_row0 = 0;  // global number of this map's row 0 (the shares' split)
     for (size_t mi = 0; mi < maps_.size(); ++mi) {
         const ObjectLightmap& map = maps_[mi];
+        if (mc_rates_.size() <= mi) mc_rates_.push_back(texel_mc_rates(map, estimator_));
+        const std::vector<float>& rates = mc_rates_[mi];
         tbb::parallel_for(0, map.height, [&](int y) {
             progress ? progress->checkpoint() : process_checkpoint();
             if (!in_share(map_row0 + y, share_index_)) {
@@ -161,7 +163,7 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
                     CounterRng rng = texel_random(settings_.seed, mi, i, s);
                     sums_[mi][i] +=
                         estimator_.estimate(t.position, t.normal, t.albedo, rng, counters,
-                                            &fixed_[mi][i], &deferred_sums_[mi][i]);
+                                            &fixed_[mi][i], &deferred_sums_[mi][i], rates[i]);
                 }
             }
             rays += counters.rays;
@@ -339,6 +341,7 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
     std::vector<IrradianceParts> sums(n), deferred(n);
     TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
     const int x0 = int(texel % size_t(map.width)), y0 = int(texel / size_t(map.width));
+    const std::vector<float> rates = texel_mc_rates(map, estimator);
     BakeCounters counters;
     for (int y = std::max(0, y0 - radius); y <= std::min(map.height - 1, y0 + radius); ++y)
         for (int x = std::max(0, x0 - radius); x <= std::min(map.width - 1, x0 + radius); ++x) {
@@ -349,7 +352,7 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
             for (int s = 0; s < spp; ++s) {
                 CounterRng rng = texel_random(seed, lightmap, j, s);
                 sums[j] += estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
-                                              &deferred[j]);
+                                              &deferred[j], rates[j]);
             }
             set_texel_filter_guide(guide, j, fixed, sums[j]);
         }

@@ -97,6 +97,9 @@ class LightmapBaker {
     // The same for the texels' deferred Monte Carlo terms (impulse), filtered over
     // neighbouring texels when the layers are made (volume/texel_filter.h).
     std::vector<std::vector<IrradianceParts>> deferred_sums_;
+    // Per lightmap, per texel: the rate of its Monte Carlo terms (texel_filter.h), made by the
+    // first pass.
+    std::vector<std::vector<float>> mc_rates_;
     // Per lightmap, per texel: its paths' shared direct light (BakeEstimator::FixedDirect).
     std::vector<std::vector<BakeEstimator::FixedDirect>> fixed_;
     std::unique_ptr<VertexCorrectionField> corrections_;

@@ -7,26 +7,62 @@
 
 namespace freqlab {
 
-std::vector<size_t> texel_filter_neighbours(const ObjectLightmap& map,
-                                            const TexelFilterGuide& guide, size_t i, int radius) {
-    std::vector<size_t> out;
-    const LightmapTexel& t = map.texels[i];
-    if (t.state != TexelState::Valid) return out;
-    const int x0 = int(i % size_t(map.width)), y0 = int(i / size_t(map.width));
-    // The window's diagonal in world units, with a margin for the chart's projection.
+namespace {
+
+// Texel j on texel i's surface within a window of `radius`: valid, facing its way and within
+// the window's diagonal in world units (with a margin for the chart's projection).
+bool on_surface_of(const ObjectLightmap& map, size_t i, size_t j, int radius) {
+    const LightmapTexel &t = map.texels[i], &u = map.texels[j];
     const float reach = 1.5f * float(radius + 1) * std::sqrt(2.0f) / map.density_at(i);
+    return u.state == TexelState::Valid && glm::dot(u.normal, t.normal) >= 0.9f &&
+           glm::length(u.position - t.position) <= reach;
+}
+
+template <typename Visit>
+void for_each_in_window(const ObjectLightmap& map, size_t i, int radius, const Visit& visit) {
+    const int x0 = int(i % size_t(map.width)), y0 = int(i / size_t(map.width));
     for (int y = std::max(0, y0 - radius); y <= std::min(map.height - 1, y0 + radius); ++y)
-        for (int x = std::max(0, x0 - radius); x <= std::min(map.width - 1, x0 + radius); ++x) {
-            const size_t j = size_t(y) * size_t(map.width) + size_t(x);
-            const LightmapTexel& u = map.texels[j];
-            const float a = guide.light[i], b = guide.light[j];
-            if (u.state != TexelState::Valid || guide.shadows[j] != guide.shadows[i] ||
-                !(std::max(a, b) <= kTexelFilterLightRatio * std::min(a, b)) ||
-                glm::dot(u.normal, t.normal) < 0.9f || glm::length(u.position - t.position) > reach)
-                continue;
-            out.push_back(j);
-        }
+        for (int x = std::max(0, x0 - radius); x <= std::min(map.width - 1, x0 + radius); ++x)
+            visit(size_t(y) * size_t(map.width) + size_t(x));
+}
+
+}  // namespace
+
+std::vector<size_t> texel_filter_neighbours(const ObjectLightmap& map,
+                                            const TexelFilterGuide& guide, size_t i, int radius,
+                                            const std::vector<char>* among) {
+    std::vector<size_t> out;
+    if (map.texels[i].state != TexelState::Valid) return out;
+    for_each_in_window(map, i, radius, [&](size_t j) {
+        const float a = guide.light[i], b = guide.light[j];
+        if ((among && !(*among)[j]) || guide.shadows[j] != guide.shadows[i] ||
+            !(std::max(a, b) <= kTexelFilterLightRatio * std::min(a, b)) ||
+            !on_surface_of(map, i, j, radius))
+            return;
+        out.push_back(j);
+    });
     return out;
+}
+
+int texel_filter_capacity(const ObjectLightmap& map, size_t i, int radius) {
+    int count = 0;
+    if (map.texels[i].state != TexelState::Valid) return count;
+    for_each_in_window(map, i, radius,
+                       [&](size_t j) { count += on_surface_of(map, i, j, radius); });
+    return count;
+}
+
+std::vector<float> texel_mc_rates(const ObjectLightmap& map, const BakeEstimator& estimator) {
+    const int radius = texel_filter_radius(estimator);
+    const float rate = estimator.settings().texel_mc_rate;
+    std::vector<float> rates(map.texels.size(), rate);
+    if (radius <= 0 || rate >= 1.0f) return rates;
+    const float window = float((2 * radius + 1) * (2 * radius + 1));
+    tbb::parallel_for(size_t(0), rates.size(), [&](size_t i) {
+        const int capacity = texel_filter_capacity(map, i, radius);
+        if (capacity > 0) rates[i] = std::min(1.0f, rate * window / float(capacity));
+    });
+    return rates;
 }
 
 void set_texel_filter_guide(TexelFilterGuide& guide, size_t i,
