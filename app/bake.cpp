@@ -126,8 +126,9 @@ void print_debug_texel(const RayScene& rays, const Media& media, const ImpulseTa
             const float emitters = luminance(here.value(false));
             std::printf(
                 "  %-10s field here (what deeper vertices landing here add): emitters' "
-                "terms %g, with surface light %g\n",
-                "", emitters, luminance(here.value(true)));
+                "terms %g, with surface light %g, and %g x their tables' single scattering of "
+                "unoccluded connections\n",
+                "", emitters, luminance(here.value(true)), luminance(here.single_ratio()));
         }
         const IrradianceParts mean =
             texel_estimate(estimator, baker.lightmaps(), lightmap_index, size_t(y) * map->width + x,

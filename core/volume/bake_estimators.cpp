@@ -320,19 +320,23 @@ const ImpulseIrradiance* BakeEstimator::irradiance_table(double g, double albedo
 
 IrradianceParts BakeEstimator::estimate(const vec3& p, const vec3& n, const vec3& albedo,
                                         CounterRng& rng, BakeCounters& counters, FixedDirect* fixed,
-                                        IrradianceParts* deferred, float mc_rate) const {
+                                        IrradianceParts* deferred, float mc_rate,
+                                        UnoccludedSingle* unoccluded) const {
     const bool reuse = fixed && settings_.tracking == Tracking::Exact;
     IrradianceParts later;
-    IrradianceParts parts =
-        method_ == BakeMethod::Vpt
-            ? volume_path(p, n, rng, counters)
-            : surface_path(p, n, albedo, 0, rng, counters, reuse ? fixed : nullptr,
-                           deferred ? &later : nullptr, false, mc_rate);
-    if (!finite(parts.total()) || !finite(later.total())) {
+    UnoccludedSingle single;
+    IrradianceParts parts = method_ == BakeMethod::Vpt
+                                ? volume_path(p, n, rng, counters)
+                                : surface_path(p, n, albedo, 0, rng, counters,
+                                               reuse ? fixed : nullptr, deferred ? &later : nullptr,
+                                               false, mc_rate, unoccluded ? &single : nullptr);
+    if (!finite(parts.total()) || !finite(later.total()) ||
+        !finite(single.tables + single.correction)) {
         ++counters.guarded;
         return {};
     }
     if (deferred) *deferred += later;
+    if (unoccluded) *unoccluded += single;
     return parts;
 }
 
@@ -809,7 +813,8 @@ vec3 BakeEstimator::local_single_correction(const EmitterSample& s, const vec3& 
 IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const vec3& albedo,
                                             int depth, CounterRng& rng, BakeCounters& counters,
                                             FixedDirect* fixed, IrradianceParts* deferred,
-                                            bool corrected, float mc_rate) const {
+                                            bool corrected, float mc_rate,
+                                            UnoccludedSingle* unoccluded) const {
     IrradianceParts parts;
     const float albedo_lum = luminance(albedo);
     // One buffer per path depth and thread: no allocation per vertex.
@@ -841,14 +846,19 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     // A vertex whose field value holds its surface light's scattering (vertex_corrections.h).
     const bool field_surface_light =
         corrected && depth < settings_.bounces && corrections_->has_surface_light();
+    // A deeper vertex reading the field keeps the tables' multiple scattering until it knows
+    // whether the field holds for it (vertex_irradiance).
+    const bool keep_multiple = no_multiple && unoccluded && !lit_here;
     for (size_t i = 0; i < local.size(); ++i) {
         const EmitterSample& s = local[i];
         OccludedConnection c;
         OccludedConnection* want = lit_here ? &c : nullptr;
         if (!fixed || !s.fixed) {
-            if (!direct_light(s, p, n, albedo_lum, rng, counters, parts, want, no_multiple) &&
-                lit_here)
-                occluded[i] = c;
+            const bool seen = direct_light(s, p, n, albedo_lum, rng, counters, parts, want,
+                                           no_multiple && !keep_multiple);
+            if (!seen && s.fixed && unoccluded)
+                unoccluded->shadows |= uint64_t(1) << (unsigned(s.light) % 64u);
+            if (!seen && lit_here) occluded[i] = c;
         } else if (learn) {
             if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, want, no_multiple) &&
                 lit_here)
@@ -877,6 +887,12 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
         mc_here = rng.next_float() < rate;
         mc_weight = 1.0f / rate;
     }
+    // Here parts.single holds the tables' single scattering of the unoccluded connections.
+    if (unoccluded) unoccluded->tables += parts.single;
+    if (keep_multiple) {
+        unoccluded->left_multiple = parts.multiple;
+        parts.multiple = vec3(0.0f);
+    }
     IrradianceParts mc;
     if (mc_here && !occluded.empty()) {
         // Each emitter's terms by roulette on its strength (bake.mc_emitter_budget).
@@ -886,13 +902,19 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
             const float w = emitter_roulette_weight(keep[i], rng);
             if (w == 0.0f) continue;
             IrradianceParts term;
-            if (occluded[i].occluded)
+            if (occluded[i].occluded) {
                 add_lit_medium(local[i], p, n, occluded[i].multiple, rng, counters, term,
                                walk_here);
-            else
-                term.single += std::isfinite(local[i].distance)
-                                   ? local_single_correction(local[i], p, n, rng, counters)
-                                   : single_correction(local[i], p, n, rng, counters);
+            } else {
+                const vec3 correction = std::isfinite(local[i].distance)
+                                            ? local_single_correction(local[i], p, n, rng, counters)
+                                            : single_correction(local[i], p, n, rng, counters);
+                // The prepass files corrections apart: the field carries them as a ratio.
+                if (prepass && unoccluded)
+                    unoccluded->correction += correction * (w * mc_weight);
+                else
+                    term.single += correction;
+            }
             mc.single += term.single * w;
             mc.multiple += term.multiple * w;
         }
@@ -1245,10 +1267,21 @@ IrradianceParts BakeEstimator::vertex_irradiance(const SurfaceHit& hit, const ve
     VertexCorrectionField::Texel field;
     if (corrections_ && scatters_ && depth > settings_.lit_medium_depth)
         field = corrections_->locate(hit);
-    IrradianceParts parts = surface_path(hit.position, hit.shading_normal, albedo, depth, rng,
-                                         counters, nullptr, deferred, field.found());
-    // Read after the vertex's own path, which hides the read's cache miss.
-    if (field.found()) parts.single += field.value(depth < settings_.bounces);
+    UnoccludedSingle single;
+    IrradianceParts parts =
+        surface_path(hit.position, hit.shading_normal, albedo, depth, rng, counters, nullptr,
+                     deferred, field.found(), -1.0f, field.found() ? &single : nullptr);
+    // Read after the vertex's own path, which hides the read's cache miss. The corrections of
+    // the unoccluded connections scale with the vertex's own tables' value of them. A vertex
+    // shadowed otherwise than the texel (a pocket of a layered wall whose texel's centre sees
+    // a lamp) keeps its tables' multiple scattering instead.
+    if (field.found()) {
+        if (field.holds_for(single.shadows))
+            parts.single +=
+                field.value(depth < settings_.bounces) + field.single_ratio() * single.tables;
+        else
+            parts.multiple += single.left_multiple;
+    }
     return parts;
 }
 

@@ -87,6 +87,24 @@ struct BakeCounters {
     long guarded = 0;          // non-finite estimates dropped
 };
 
+// A vertex's tables' single scattering of its unoccluded connections and, at a texel of the
+// vertex correction field's prepass, the Monte Carlo corrections of it (single_correction,
+// local_single_correction): the field carries their ratio, which a deeper vertex applies to its
+// own tables' value (vertex_corrections.h).
+// A deeper vertex also learns from it which point and directional lights it sees occluded (a
+// bit each, as the texel filter's guide) and the tables' multiple scattering it left to the
+// field: the field's value holds only for points shadowed as its texel is.
+struct UnoccludedSingle {
+    vec3 tables{0.0f}, correction{0.0f};
+    uint64_t shadows = 0;
+    vec3 left_multiple{0.0f};
+    UnoccludedSingle& operator+=(const UnoccludedSingle& o) {
+        tables += o.tables;
+        correction += o.correction;
+        return *this;
+    }
+};
+
 class VertexCorrectionField;
 
 class BakeEstimator {
@@ -127,10 +145,12 @@ class BakeEstimator {
     // given, receives the texel's Monte Carlo terms through the real media instead of the
     // result (the baker filters them over neighbouring texels; without it they are added).
     // mc_rate > 0: the rate of the receiver's Monte Carlo terms instead of
-    // bake.texel_mc_rate (texel_filter.h's texel_mc_rates).
+    // bake.texel_mc_rate (texel_filter.h's texel_mc_rates). `unoccluded`, when given, receives
+    // the receiver's UnoccludedSingle (the field's prepass).
     IrradianceParts estimate(const vec3& p, const vec3& n, const vec3& albedo, CounterRng& rng,
                              BakeCounters& counters, FixedDirect* fixed = nullptr,
-                             IrradianceParts* deferred = nullptr, float mc_rate = -1.0f) const;
+                             IrradianceParts* deferred = nullptr, float mc_rate = -1.0f,
+                             UnoccludedSingle* unoccluded = nullptr) const;
 
     BakeMethod method() const { return method_; }
     const BakeSettings& settings() const { return settings_; }
@@ -261,7 +281,8 @@ class BakeEstimator {
     IrradianceParts surface_path(const vec3& p, const vec3& n, const vec3& albedo, int depth,
                                  CounterRng& rng, BakeCounters& counters,
                                  FixedDirect* fixed = nullptr, IrradianceParts* deferred = nullptr,
-                                 bool corrected = false, float mc_rate = -1.0f) const;
+                                 bool corrected = false, float mc_rate = -1.0f,
+                                 UnoccludedSingle* unoccluded = nullptr) const;
     // A surface vertex at depth `depth` reached by a ray (hit): its surface_path plus, when the
     // vertex correction field covers it, the field's value (added to the single part: it is
     // in-scattered light). What indirect segments and walks take as the vertex's irradiance.

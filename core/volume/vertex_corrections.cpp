@@ -37,18 +37,26 @@ constexpr double kFieldPathFraction = 0.5;
 template <typename SameSurface>
 void filter_computed(const ObjectLightmap& map, const std::vector<char>& done,
                      const TexelFilterGuide& guide, const SameSurface& same_surface,
-                     std::vector<IrradianceParts>& deferred) {
+                     std::vector<IrradianceParts>& deferred,
+                     std::vector<UnoccludedSingle>& unoccluded) {
     std::vector<IrradianceParts> filtered(deferred.size());
+    std::vector<UnoccludedSingle> filtered_unoccluded(unoccluded.size());
     tbb::parallel_for(size_t(0), deferred.size(), [&](size_t i) {
         if (!done[i]) return;
         std::vector<size_t> near = texel_filter_neighbours(map, guide, i, kFieldStride, &done);
         near.erase(std::remove_if(near.begin(), near.end(),
                                   [&](size_t j) { return j != i && !same_surface(i, j); }),
                    near.end());
-        filtered[i] = near.empty() ? deferred[i] : mean_of_texels(deferred, near);
+        if (near.empty()) near.push_back(i);
+        filtered[i] = mean_of_texels(deferred, near);
+        // Sums, not means: the field carries their ratio.
+        for (size_t j : near) filtered_unoccluded[i] += unoccluded[j];
     });
     for (size_t i = 0; i < deferred.size(); ++i)
-        if (done[i]) deferred[i] = filtered[i];
+        if (done[i]) {
+            deferred[i] = filtered[i];
+            unoccluded[i] = filtered_unoccluded[i];
+        }
 }
 
 // Straddle rays run this fraction of a texel above the surface: a wall standing on it blocks
@@ -72,6 +80,32 @@ bool straddles_geometry(const RayScene& rays, const ObjectLightmap& map, size_t 
          {frame.t + frame.b, frame.t - frame.b, -frame.t + frame.b, -frame.t - frame.b})
         if (rays.occluded(shadow_ray(from, glm::normalize(d), reach))) return true;
     return false;
+}
+
+// A surface point is covered when geometry lies within this fraction of a texel along its
+// normal: valley's IFC walls stand in layers 0.025 apart, and the rays above (0.1 texel) run
+// past the inner layer. A texel whose centre and corners differ in that (the inner layer ends
+// inside its footprint) straddles too.
+constexpr float kCoverReach = 0.25f;
+
+bool covered(const RayScene& rays, const vec3& p, const vec3& n, float reach) {
+    return rays.occluded(shadow_ray(spawn_point(p, n), n, reach));
+}
+
+struct Cover {
+    bool centre = false, mixed = false;
+};
+
+Cover cover_of(const RayScene& rays, const ObjectLightmap& map, size_t i) {
+    const LightmapTexel& t = map.texels[i];
+    const Frame frame(t.normal);
+    const float reach = kCoverReach / map.density_at(i), half = 0.45f / map.density_at(i);
+    Cover c;
+    c.centre = covered(rays, t.position, t.normal, reach);
+    for (const vec3& d :
+         {frame.t + frame.b, frame.t - frame.b, -frame.t + frame.b, -frame.t - frame.b})
+        c.mixed = c.mixed || covered(rays, t.position + d * half, t.normal, reach) != c.centre;
+    return c;
 }
 
 // Whether the segment between two points is clear.
@@ -124,7 +158,8 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
             triangles_[mi][t] = triangle_to_texels(rays, map, t);
         const size_t n = map.texels.size();
         std::vector<IrradianceParts> deferred(n);
-        std::vector<char> done(n, 0);
+        std::vector<UnoccludedSingle> unoccluded(n);
+        std::vector<char> done(n, 0), gated(n, 0);
         TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
         auto run = [&](size_t i) {
             const LightmapTexel& t = map.texels[i];
@@ -135,9 +170,10 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
             for (int s = 0; s < paths_; ++s) {
                 CounterRng rng = texel_random(settings.seed, maps.size() + 1 + mi, i, s);
                 sum += estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
-                                          &deferred[i]);
+                                          &deferred[i], -1.0f, &unoccluded[i]);
             }
             set_texel_filter_guide(guide, i, fixed, sum);
+            gated[i] = fixed.known;  // its lights' shadows known (exact tracking)
             done[i] = 1;
             rays_cast += counters.rays;
             ++computed;
@@ -145,8 +181,11 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
         const int w = map.width, stride = kFieldStride;
         auto valid = [&](size_t i) { return map.texels[i].state == TexelState::Valid; };
         std::vector<char> straddles(n, 0);
+        std::vector<Cover> cover(n);
         tbb::parallel_for(size_t(0), n, [&](size_t i) {
-            if (valid(i)) straddles[i] = straddles_geometry(rays, map, i);
+            if (!valid(i)) return;
+            cover[i] = cover_of(rays, map, i);
+            straddles[i] = cover[i].mixed || straddles_geometry(rays, map, i);
         });
         // Neighbours in the atlas stand for a texel when they face its way and, where geometry
         // crosses either footprint, see it (not the eave's light for the attic behind the wall).
@@ -179,36 +218,49 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
             if (sources[i].empty()) missing.push_back(i);
         }
         tbb::parallel_for(size_t(0), missing.size(), [&](size_t k) { run(missing[k]); });
-        filter_computed(map, done, guide, same_surface, deferred);
+        filter_computed(map, done, guide, same_surface, deferred, unoccluded);
         for (size_t i = 0; i < n; ++i) {
             if (sources[i].empty()) continue;
-            IrradianceParts mean;
-            for (size_t j : sources[i]) mean += deferred[j];
-            const float inv = 1.0f / float(sources[i].size());
-            deferred[i].surface = mean.surface * inv;
-            deferred[i].single = mean.single * inv;
-            deferred[i].multiple = mean.multiple * inv;
+            // The sources shadowed as the first one is: the texel's value and shadows.
+            const size_t first = sources[i].front();
+            std::vector<size_t>& like = sources[i];
+            like.erase(std::remove_if(like.begin(), like.end(),
+                                      [&](size_t j) {
+                                          return guide.shadows[j] != guide.shadows[first] ||
+                                                 gated[j] != gated[first];
+                                      }),
+                       like.end());
+            deferred[i] = mean_of_texels(deferred, like);
+            for (size_t j : like) unoccluded[i] += unoccluded[j];
+            guide.shadows[i] = guide.shadows[first];
+            gated[i] = gated[first];
         }
-        // Per texel: the emitters' RGB, the surface light's RGB, then (not stored) the lifted
+        // Per texel: the emitters' RGB, the surface light's RGB, the corrections' ratio to the
+        // tables' single scattering of the unoccluded connections, then (not stored) the lifted
         // centre, the lift and whether geometry crosses the footprint, dilated alike.
-        constexpr size_t kChannels = 11;
+        constexpr size_t kChannels = 14, kCentre = 9, kLift = 12, kStraddles = 13;
         std::vector<float> v(n * kChannels, 0.0f);
         for (size_t i = 0; i < n; ++i) {
             if (valid(i)) {
                 const vec3 centre = lifted(i);
-                for (int c = 0; c < 3; ++c) v[i * kChannels + 6 + size_t(c)] = centre[c];
-                v[i * kChannels + 9] = straddle_lift(map, i);
-                v[i * kChannels + 10] = straddles[i] ? 1.0f : 0.0f;
+                for (int c = 0; c < 3; ++c) v[i * kChannels + kCentre + size_t(c)] = centre[c];
+                v[i * kChannels + kLift] = straddle_lift(map, i);
+                v[i * kChannels + kStraddles] = straddles[i] ? 1.0f : 0.0f;
             }
             const vec3 emitters = (deferred[i].single + deferred[i].multiple) / float(paths_);
             const vec3 surface = deferred[i].surface / float(paths_);
+            vec3 ratio(0.0f);
+            for (int c = 0; c < 3; ++c)
+                if (unoccluded[i].tables[c] > 0.0f)
+                    ratio[c] = unoccluded[i].correction[c] / unoccluded[i].tables[c];
             if (map.texels[i].state != TexelState::Valid ||
                 !std::isfinite(emitters.x + emitters.y + emitters.z + surface.x + surface.y +
-                               surface.z))
+                               surface.z + ratio.x + ratio.y + ratio.z))
                 continue;
             for (int c = 0; c < 3; ++c) {
                 v[i * kChannels + size_t(c)] = emitters[c];
                 v[i * kChannels + 3 + size_t(c)] = surface[c];
+                v[i * kChannels + 6 + size_t(c)] = ratio[c];
             }
         }
         // Lookups near a chart's edge may land on the ring outside it.
@@ -216,20 +268,33 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
         PackedMap& packed = packed_[mi];
         packed.width = map.width;
         packed.height = map.height;
-        for (size_t i = 0; i < n; ++i)
-            for (size_t c = 0; c < 6; ++c)
-                packed.scale = std::max(packed.scale, std::abs(v[i * kChannels + c]));
-        const float inv = packed.scale > 0.0f ? 1.0f / packed.scale : 0.0f;
-        packed.halves.resize(n * 6);
-        packed.straddles.assign((n + 63) / 64, 0);
         for (size_t i = 0; i < n; ++i) {
             for (size_t c = 0; c < 6; ++c)
-                packed.halves[i * 6 + c] = glm::packHalf1x16(v[i * kChannels + c] * inv);
+                packed.scale = std::max(packed.scale, std::abs(v[i * kChannels + c]));
+            for (size_t c = 6; c < 9; ++c)
+                packed.ratio_scale = std::max(packed.ratio_scale, std::abs(v[i * kChannels + c]));
+        }
+        const float inv = packed.scale > 0.0f ? 1.0f / packed.scale : 0.0f;
+        const float inv_ratio = packed.ratio_scale > 0.0f ? 1.0f / packed.ratio_scale : 0.0f;
+        packed.halves.resize(n * kHalvesPerTexel);
+        packed.straddles.assign((n + 63) / 64, 0);
+        for (size_t i = 0; i < n; ++i) {
+            uint16_t* h = &packed.halves[i * kHalvesPerTexel];
+            for (size_t c = 0; c < 9; ++c)
+                h[c] = glm::packHalf1x16(v[i * kChannels + c] * (c < 6 ? inv : inv_ratio));
+            // The shadows of the texel's point and directional lights, where known (valid
+            // texels under exact tracking; dilated ones hold for any hit).
+            const bool gate = states[i] == TexelState::Valid && gated[i];
+            for (int w16 = 0; w16 < 4; ++w16)
+                h[9 + w16] = gate ? uint16_t(guide.shadows[i] >> (16 * w16)) : 0;
+            h[13] = gate ? 1 : 0;
             const bool filled = states[i] == TexelState::Valid || states[i] == TexelState::Dilated;
-            if (filled && v[i * kChannels + 10] > 0.0f) {
-                const float* e = &v[i * kChannels + 6];
+            if (filled && v[i * kChannels + kStraddles] > 0.0f) {
+                const float* e = &v[i * kChannels + kCentre];
                 packed.straddles[i / 64] |= uint64_t(1) << (i % 64);
-                packed.centres.push_back({uint32_t(i), vec3(e[0], e[1], e[2]), e[3]});
+                const bool mixed = states[i] == TexelState::Valid && cover[i].mixed;
+                packed.centres.push_back(
+                    {uint32_t(i), vec3(e[0], e[1], e[2]), e[3], mixed, mixed && cover[i].centre});
                 straddling += states[i] == TexelState::Valid;
             }
         }
@@ -262,13 +327,17 @@ VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit
             std::lower_bound(map.centres.begin(), map.centres.end(), uint32_t(k),
                              [](const StraddlingTexel& e, uint32_t key) { return e.texel < key; });
         if (it != map.centres.end() && it->texel == k &&
-            !sees(*scene_,
-                  spawn_point(hit.position + hit.geometric_normal * it->lift, hit.geometric_normal),
-                  it->lifted_centre))
+            (!sees(
+                 *scene_,
+                 spawn_point(hit.position + hit.geometric_normal * it->lift, hit.geometric_normal),
+                 it->lifted_centre) ||
+             (it->check_cover && covered(*scene_, hit.position, hit.geometric_normal,
+                                         it->lift * (kCoverReach / kStraddleLift)) != it->covered)))
             return texel;
     }
-    texel.halves_ = map.halves.data() + k * 6;
+    texel.halves_ = map.halves.data() + k * kHalvesPerTexel;
     texel.scale_ = map.scale;
+    texel.ratio_scale_ = map.ratio_scale;
     texel.surface_light_ = surface_light_;
     __builtin_prefetch(texel.halves_);
     return texel;
@@ -276,9 +345,10 @@ VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit
 
 VertexCorrectionField::Texel VertexCorrectionField::at_texel(size_t map, size_t texel) const {
     Texel t;
-    if (map >= packed_.size() || texel * 6 >= packed_[map].halves.size()) return t;
-    t.halves_ = packed_[map].halves.data() + texel * 6;
+    if (map >= packed_.size() || texel * kHalvesPerTexel >= packed_[map].halves.size()) return t;
+    t.halves_ = packed_[map].halves.data() + texel * kHalvesPerTexel;
     t.scale_ = packed_[map].scale;
+    t.ratio_scale_ = packed_[map].ratio_scale;
     t.surface_light_ = surface_light_;
     return t;
 }
@@ -291,6 +361,19 @@ vec3 VertexCorrectionField::Texel::value(bool with_surface_light) const {
     vec3 v = rgb(halves_);
     if (with_surface_light && surface_light_) v += rgb(halves_ + 3);
     return v * scale_;
+}
+
+bool VertexCorrectionField::Texel::holds_for(uint64_t shadows) const {
+    if (halves_[13] == 0) return true;
+    uint64_t own = 0;
+    for (int w16 = 0; w16 < 4; ++w16) own |= uint64_t(halves_[9 + w16]) << (16 * w16);
+    return own == shadows;
+}
+
+vec3 VertexCorrectionField::Texel::single_ratio() const {
+    return vec3(glm::unpackHalf1x16(halves_[6]), glm::unpackHalf1x16(halves_[7]),
+                glm::unpackHalf1x16(halves_[8])) *
+           ratio_scale_;
 }
 
 }  // namespace freqlab

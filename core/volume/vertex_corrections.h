@@ -9,11 +9,20 @@
 // Before the first pass the baker estimates the texels' Monte Carlo terms (a prepass: every
 // path runs them, no indirect segment; every second texel in x and y, the others the mean of
 // those around them on their surface; ceil(spp x texel_mc_rate / 2) paths a texel): the
-// emitters' (single-scattering corrections, lit medium, the walk's multiple) and, apart, the
-// walk's light of other surfaces. It is not filtered: deeper vertices integrate it over what
-// they see, and near a seam (a box's foot) the texel filter's 7x7 window blurred a correction
-// that changes within a texel (short box's bottom row read +18 % unscattered light; relMSE
-// 0.0028 -> 0.0008 without the filter, variance unchanged).
+// emitters' (lit medium, the walk's multiple) and, apart, the walk's light of other surfaces;
+// the single-scattering corrections of unoccluded connections as their ratio to the tables'
+// single scattering of those connections, which a deeper vertex multiplies by its own tables'
+// value (added, they reached vertices whose own connections were occluded: valley's terrain
+// under a house's floor read -0.40, one environment sample through a 0.03-unit gap). Each
+// computed texel takes the mean of the computed texels within 2 that the bake's texel filter
+// would average with it (its surface, its side of every fixed light's shadow, its light
+// level): one path a texel, read alike by every vertex landing there, passed its noise to all
+// of them (valley's houses' relMSE 20-30). The texel filter's 7x7 window blurred a correction
+// that changes within a texel near a seam (cornell's short box's bottom row read +18 %
+// unscattered light); this one spans 5x5 and stops at the shadows. Each texel also keeps
+// which point and directional lights it sees occluded: a vertex shadowed otherwise (a pocket
+// of a layered IFC wall whose texel's centre sees a lamp: +0.14 where VPT reads 0) does not
+// read it and keeps its tables' multiple scattering.
 // A vertex deeper than bake.lit_medium_depth that lands on a lightmapped surface adds the
 // field's value at the nearest texel to its irradiance: the emitters' part, and the surface
 // light's where the vertex continues the path (its indirect segment then carries only
@@ -75,11 +84,17 @@ class VertexCorrectionField {
         // The correction irradiance, with its surface light's scattering when the vertex
         // continues the path (with_surface_light).
         vec3 value(bool with_surface_light) const;
+        // The corrections of the unoccluded connections over the tables' single scattering of
+        // them (UnoccludedSingle): the vertex adds this times its own tables' value.
+        vec3 single_ratio() const;
+        // Whether the value holds for a point that sees the point and directional lights of
+        // `shadows` occluded (a bit each): the texel's own, or any for a dilated texel.
+        bool holds_for(uint64_t shadows) const;
 
       private:
         friend class VertexCorrectionField;
         const uint16_t* halves_ = nullptr;
-        float scale_ = 0.0f;
+        float scale_ = 0.0f, ratio_scale_ = 0.0f;
         bool surface_light_ = false;
     };
     Texel locate(const SurfaceHit& hit) const;
@@ -116,10 +131,15 @@ class VertexCorrectionField {
         uint32_t texel;
         vec3 lifted_centre;
         float lift;
+        // Geometry close above covers part of the footprint: a hit reads the texel only when
+        // covered as its centre is (a ray along the hit's normal, kCoverReach of a texel).
+        bool check_cover = false, covered = false;
     };
+    // Emitters, surface light, ratio (RGB each), the shadows' 64 bits, whether they are known.
+    static constexpr size_t kHalvesPerTexel = 14;
     struct PackedMap {
         int width = 0, height = 0;
-        float scale = 0.0f;
+        float scale = 0.0f, ratio_scale = 0.0f;
         std::vector<uint16_t> halves;
         // Texels crossed by geometry (a bit each) and their centres, by texel index.
         std::vector<uint64_t> straddles;
