@@ -671,3 +671,47 @@ TEST(Bake, VertexCorrectionFieldDoesNotLeakThroughWallsCrossingItsTexels) {
     EXPECT_TRUE(field->locate(floor_hit(1.8f, 0.3f)).found());
     EXPECT_TRUE(field->locate(floor_hit(0.5f, 0.4f)).found());
 }
+
+// A lid 0.02 above a floor lit by a lamp beside it, ending inside a floor texel whose centre
+// (x = 1.5) is in the open: the lid's underside sends its paths into the gap, where they land
+// in that texel. Valley's layered IFC walls (0.025 apart) did this: the gap's hits read the
+// lamp-lit centre's surface light, +0.14 where VPT reads 0 (90 % of the bake's relMSE). The
+// rays that find walls crossing a footprint run 0.1 texel high, above such a gap; a footprint
+// partly covered close above straddles too, and a hit reads it only when covered as the centre
+// is. And a field texel keeps the shadows of its point and directional lights: a hit shadowed
+// otherwise does not read it.
+TEST(Bake, VertexCorrectionFieldIsNotReadInAGapUnderALid) {
+    Fixture f(R"({"frames": 1, "camera": {"position": [0, -9, 5], "look_at": [0, 0, 0]},
+      "materials": {"m": {"type": "lambert", "albedo": 0.6}},
+      "objects": [{"name": "floor", "shape": {"type": "plane", "size": [8, 8]}, "material": "m"},
+                  {"name": "lid", "shape": {"type": "plane", "size": [5.3, 8]}, "material": "m",
+                   "transform": {"translate": [-1.35, 0, 0.02],
+                                 "rotate": {"axis": [1, 0, 0], "deg": 180}}}],
+      "lights": [{"type": "point", "position": [3, 0, 2], "intensity": 20}],
+      "media": [{"sigma_s": 0.08, "sigma_a": 0.01, "g": 0.3,
+                 "bounds": {"box": {"min": [-4, -4, 0], "max": [4, 4, 4]}}}]})");
+    const ImpulseTables& tables = test_support::shared_impulse_tables();
+    BakeSettings s;
+    s.spp = 4;
+    s.bounces = 2;
+    s.texel_density = 1.0f;
+    s.probes_x = 0;
+    LightmapBaker baker(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
+    baker.run();
+    const VertexCorrectionField* field = baker.vertex_corrections();
+    ASSERT_NE(field, nullptr);
+    auto floor_hit = [&](float x, float y, float from_z) {
+        const SurfaceHit hit =
+            f.rays->intersect(Ray{vec3(x, y, from_z), vec3(0, 0, -1), 0.0f, from_z + 1.0f});
+        EXPECT_TRUE(hit.valid && hit.object == 0) << x << ", " << y;
+        return hit;
+    };
+    // In the gap, within the texel whose centre is in the open: not read.
+    EXPECT_FALSE(field->locate(floor_hit(1.1f, 0.3f, 0.01f)).found());
+    EXPECT_FALSE(field->locate(floor_hit(1.2f, -0.4f, 0.01f)).found());
+    // In the open part of that texel: read, for points that see the lamp as its centre does.
+    const VertexCorrectionField::Texel open = field->locate(floor_hit(1.8f, 0.3f, 1.0f));
+    ASSERT_TRUE(open.found());
+    EXPECT_TRUE(open.holds_for(0));
+    EXPECT_FALSE(open.holds_for(1));  // light 0 occluded: not like the centre
+}

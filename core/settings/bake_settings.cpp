@@ -49,7 +49,7 @@ const SettingsSchema& BakeSettings::schema() {
                    "noisier). They are small corrections of smooth light, and cost as much as "
                    "the rest of the path. A texel whose filter window (texel_mc_radius) holds "
                    "fewer texels of its surface runs them more often: rate x (2r+1)^2 / those "
-                   "texels, at most 1.")
+                   "texels, at most 8 x rate and 1.")
             .field(&BakeSettings::mc_emitter_budget, "mc_emitter_budget", 0, 64, "emitters",
                    kInvalidatesBake,
                    "Impulse and vpt: the Monte Carlo terms' emitters (the texel's corrections and "

@@ -60,7 +60,8 @@ std::vector<float> texel_mc_rates(const ObjectLightmap& map, const BakeEstimator
     const float window = float((2 * radius + 1) * (2 * radius + 1));
     tbb::parallel_for(size_t(0), rates.size(), [&](size_t i) {
         const int capacity = texel_filter_capacity(map, i, radius);
-        if (capacity > 0) rates[i] = std::min(1.0f, rate * window / float(capacity));
+        if (capacity > 0)
+            rates[i] = std::min(1.0f, rate * std::min(kMaxMcRateBoost, window / float(capacity)));
     });
     return rates;
 }

@@ -48,10 +48,14 @@ IrradianceParts mean_of_texels(const std::vector<IrradianceParts>& sums,
 // surface (before the bake's shadow and light-level tests).
 int texel_filter_capacity(const ObjectLightmap& map, size_t i, int radius);
 // The rate at which each texel runs its Monte Carlo terms: bake.texel_mc_rate x (2r + 1)^2 /
-// its capacity, at most 1, so that every texel's filtered terms rest on about as many samples
-// as a texel amid a wide flat chart. At the window's full rate valley's statues (small charts,
-// curved at 1 texel/unit: a window of 1-5 like texels) took one lit-medium sample of the sky
-// at weight 50 alone: 80 against VPT's 0.70, relMSE 9.9 on statue03 at 16 spp.
+// its capacity (at most kMaxMcRateBoost times the rate, at most 1), so that a texel's filtered
+// terms rest on about as many samples as a texel's amid a wide flat chart. At the plain rate
+// valley's statues (small charts, curved at 1 texel/unit: windows of 1-5 like texels) took one
+// lit-medium sample of the sky at weight 50 alone: 80 against VPT's 0.70, relMSE 9.9 on
+// statue03 at 16 spp. valley at 1 texel/unit, 16 spp, boost at most 1 / 4 / 8 / 49: bake 6.0 /
+// 7.1 / 7.3 / 9.5 s, lm_irradiance relMSE 1.16 / 0.82 / 0.74 / 0.67 (statues' rel. L2 0.63 /
+// 0.36 / 0.29 / 0.19): 8 has the least error x time.
+constexpr float kMaxMcRateBoost = 8.0f;
 std::vector<float> texel_mc_rates(const ObjectLightmap& map, const BakeEstimator& estimator);
 // The texels filter_texel_sums averages for texel i (i itself among them); with `among`, only
 // the texels it flags (the vertex correction field's computed texels).

@@ -215,25 +215,24 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
                     const size_t j = size_t(y) * size_t(w) + size_t(x);
                     if (done[j] && same_surface(i, j)) sources[i].push_back(j);
                 }
+            // Sources on both sides of a light's shadow: the texel's own side is unknown, so
+            // it runs itself (the texels along shadow edges).
+            const bool mixed = std::any_of(sources[i].begin(), sources[i].end(), [&](size_t j) {
+                return guide.shadows[j] != guide.shadows[sources[i].front()] ||
+                       gated[j] != gated[sources[i].front()];
+            });
+            if (mixed) sources[i].clear();
             if (sources[i].empty()) missing.push_back(i);
         }
         tbb::parallel_for(size_t(0), missing.size(), [&](size_t k) { run(missing[k]); });
         filter_computed(map, done, guide, same_surface, deferred, unoccluded);
         for (size_t i = 0; i < n; ++i) {
             if (sources[i].empty()) continue;
-            // The sources shadowed as the first one is: the texel's value and shadows.
-            const size_t first = sources[i].front();
-            std::vector<size_t>& like = sources[i];
-            like.erase(std::remove_if(like.begin(), like.end(),
-                                      [&](size_t j) {
-                                          return guide.shadows[j] != guide.shadows[first] ||
-                                                 gated[j] != gated[first];
-                                      }),
-                       like.end());
-            deferred[i] = mean_of_texels(deferred, like);
-            for (size_t j : like) unoccluded[i] += unoccluded[j];
-            guide.shadows[i] = guide.shadows[first];
-            gated[i] = gated[first];
+            // The sources, all shadowed alike: the texel's value and shadows.
+            deferred[i] = mean_of_texels(deferred, sources[i]);
+            for (size_t j : sources[i]) unoccluded[i] += unoccluded[j];
+            guide.shadows[i] = guide.shadows[sources[i].front()];
+            gated[i] = gated[sources[i].front()];
         }
         // Per texel: the emitters' RGB, the surface light's RGB, the corrections' ratio to the
         // tables' single scattering of the unoccluded connections, then (not stored) the lifted
