@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "math/types.h"
 
@@ -35,5 +36,32 @@ double integrate_sphere(F f, double c0 = -1, double c1 = 1, double p0 = 0, doubl
         }
     return total;
 }
+
+// A (cos theta, phi) grid over [c0, c1] x [0, 2 pi): the bins of a chi-square test of sampled
+// directions against their pdf.
+struct DirectionBins {
+    int cos_bins = 16, phi_bins = 32;
+    double c0 = -1.0, c1 = 1.0;
+    size_t size() const { return size_t(cos_bins * phi_bins); }
+    size_t index(const vec3& w) const {
+        const int ci = std::clamp(int((double(w.z) - c0) / (c1 - c0) * cos_bins), 0, cos_bins - 1);
+        double phi = std::atan2(double(w.y), double(w.x));
+        if (phi < 0) phi += 2 * M_PI;
+        const int pi = std::clamp(int(phi / (2 * M_PI) * phi_bins), 0, phi_bins - 1);
+        return size_t(ci * phi_bins + pi);
+    }
+    // n samples' expected count in each bin.
+    template <class Pdf>
+    std::vector<double> expected(Pdf pdf, int n) const {
+        std::vector<double> out(size());
+        for (int ci = 0; ci < cos_bins; ++ci)
+            for (int pi = 0; pi < phi_bins; ++pi)
+                out[size_t(ci * phi_bins + pi)] =
+                    n * integrate_sphere(pdf, c0 + (c1 - c0) * ci / cos_bins,
+                                         c0 + (c1 - c0) * (ci + 1) / cos_bins,
+                                         2 * M_PI * pi / phi_bins, 2 * M_PI * (pi + 1) / phi_bins);
+        return out;
+    }
+};
 
 }  // namespace freqlab::test

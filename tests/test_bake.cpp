@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 
 #include <tbb/parallel_for.h>
 
@@ -602,6 +603,31 @@ TEST(Bake, MethodListKeepsEverySeparator) {
     EXPECT_THROW(parse_bake_method("walk"), Error);
 }
 
+namespace {
+
+// An impulse bake at 1 texel per unit without probes: the vertex correction field's tests.
+std::unique_ptr<LightmapBaker> bake_field(const Fixture& f, int spp) {
+    BakeSettings s;
+    s.spp = spp;
+    s.bounces = 2;
+    s.texel_density = 1.0f;
+    s.probes_x = 0;
+    auto baker = std::make_unique<LightmapBaker>(
+        *f.rays, f.media, &test_support::shared_impulse_tables(), BakeMethod::Impulse, s);
+    baker->run();
+    return baker;
+}
+
+// The floor (object 0) under (x, y), by a ray down from height `from_z`.
+SurfaceHit floor_hit(const Fixture& f, float x, float y, float from_z) {
+    const SurfaceHit hit =
+        f.rays->intersect(Ray{vec3(x, y, from_z), vec3(0, 0, -1), 0.0f, from_z + 1.0f});
+    EXPECT_TRUE(hit.valid && hit.object == 0) << x << ", " << y;
+    return hit;
+}
+
+}  // namespace
+
 // A closed room (walls 0.15 thick at half-width 1.1-1.25, a canopy reaching past them as its
 // ceiling) on a sunlit floor in fog, baked at 1 texel per unit: the floor's texels centred at
 // x = 1.5 lie outside, their footprints reach into the room. Impulse's deeper vertices read the
@@ -647,29 +673,18 @@ TEST(Bake, VertexCorrectionFieldDoesNotLeakThroughWallsCrossingItsTexels) {
       "lights": [{"type": "directional", "direction": [0.3, 0.2, -1], "irradiance": 3}],
       "media": [{"sigma_s": 0.08, "sigma_a": 0.01, "g": 0.3,
                  "bounds": {"box": {"min": [-4, -4, 0], "max": [4, 4, 4]}}}]})");
-    const ImpulseTables& tables = test_support::shared_impulse_tables();
-    BakeSettings s;
-    s.spp = 16;
-    s.bounces = 2;
-    s.texel_density = 1.0f;
-    s.probes_x = 0;
-    LightmapBaker baker(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
-    baker.run();
-    const VertexCorrectionField* field = baker.vertex_corrections();
+    const std::unique_ptr<LightmapBaker> baker = bake_field(f, 16);
+    const VertexCorrectionField* field = baker->vertex_corrections();
     ASSERT_NE(field, nullptr);
     EXPECT_GT(field->straddling_texels(), 0);
     // Hits on the floor, from 1 unit above (under the canopy).
-    auto floor_hit = [&](float x, float y) {
-        const SurfaceHit hit = f.rays->intersect(Ray{vec3(x, y, 1.0f), vec3(0, 0, -1), 0.0f, 2.0f});
-        EXPECT_TRUE(hit.valid && hit.object == 0) << x << ", " << y;
-        return hit;
-    };
+    auto hit = [&](float x, float y) { return floor_hit(f, x, y, 1.0f); };
     // The texel covering x in [1, 2] (centre 1.5, outside): inside the room it is not read...
-    EXPECT_FALSE(field->locate(floor_hit(1.05f, 0.3f)).found());
-    EXPECT_FALSE(field->locate(floor_hit(0.3f, -1.05f)).found());
+    EXPECT_FALSE(field->locate(hit(1.05f, 0.3f)).found());
+    EXPECT_FALSE(field->locate(hit(0.3f, -1.05f)).found());
     // ... outside it is; and inside, texels the walls do not cross are read.
-    EXPECT_TRUE(field->locate(floor_hit(1.8f, 0.3f)).found());
-    EXPECT_TRUE(field->locate(floor_hit(0.5f, 0.4f)).found());
+    EXPECT_TRUE(field->locate(hit(1.8f, 0.3f)).found());
+    EXPECT_TRUE(field->locate(hit(0.5f, 0.4f)).found());
 }
 
 // A lid 0.02 above a floor lit by a lamp beside it, ending inside a floor texel whose centre
@@ -690,27 +705,14 @@ TEST(Bake, VertexCorrectionFieldIsNotReadInAGapUnderALid) {
       "lights": [{"type": "point", "position": [3, 0, 2], "intensity": 20}],
       "media": [{"sigma_s": 0.08, "sigma_a": 0.01, "g": 0.3,
                  "bounds": {"box": {"min": [-4, -4, 0], "max": [4, 4, 4]}}}]})");
-    const ImpulseTables& tables = test_support::shared_impulse_tables();
-    BakeSettings s;
-    s.spp = 4;
-    s.bounces = 2;
-    s.texel_density = 1.0f;
-    s.probes_x = 0;
-    LightmapBaker baker(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
-    baker.run();
-    const VertexCorrectionField* field = baker.vertex_corrections();
+    const std::unique_ptr<LightmapBaker> baker = bake_field(f, 4);
+    const VertexCorrectionField* field = baker->vertex_corrections();
     ASSERT_NE(field, nullptr);
-    auto floor_hit = [&](float x, float y, float from_z) {
-        const SurfaceHit hit =
-            f.rays->intersect(Ray{vec3(x, y, from_z), vec3(0, 0, -1), 0.0f, from_z + 1.0f});
-        EXPECT_TRUE(hit.valid && hit.object == 0) << x << ", " << y;
-        return hit;
-    };
     // In the gap, within the texel whose centre is in the open: not read.
-    EXPECT_FALSE(field->locate(floor_hit(1.1f, 0.3f, 0.01f)).found());
-    EXPECT_FALSE(field->locate(floor_hit(1.2f, -0.4f, 0.01f)).found());
+    EXPECT_FALSE(field->locate(floor_hit(f, 1.1f, 0.3f, 0.01f)).found());
+    EXPECT_FALSE(field->locate(floor_hit(f, 1.2f, -0.4f, 0.01f)).found());
     // In the open part of that texel: read, for points that see the lamp as its centre does.
-    const VertexCorrectionField::Texel open = field->locate(floor_hit(1.8f, 0.3f, 1.0f));
+    const VertexCorrectionField::Texel open = field->locate(floor_hit(f, 1.8f, 0.3f, 1.0f));
     ASSERT_TRUE(open.found());
     EXPECT_TRUE(open.holds_for(0));
     EXPECT_FALSE(open.holds_for(1));  // light 0 occluded: not like the centre

@@ -52,31 +52,22 @@ vec3 view_direction(float theta_deg) {
 }  // namespace
 
 TEST(Sampling, BrdfSamplesFollowTheirPdf) {
-    const int cos_bins = 20, phi_bins = 40, n = 400000;
+    const test::DirectionBins bins{20, 40};
+    const int n = 400000;
     for (const BrdfCase& c : brdf_cases()) {
         SCOPED_TRACE(c.name);
         const Brdf brdf(c.m, vec3(1.0f), vec3(0, 0, 1));
         const vec3 wo = view_direction(c.view_theta_deg);
-        std::vector<double> observed(size_t(cos_bins * phi_bins), 0.0), expected(observed.size());
+        std::vector<double> observed(bins.size(), 0.0);
         CounterRng rng(11, 0, 0, 0);
         for (int i = 0; i < n; ++i) {
             const BrdfSample s = brdf.sample(wo, rng.next_float(), rng.next_float());
             if (s.pdf <= 0) continue;
             EXPECT_NEAR(s.pdf, brdf.pdf(wo, s.wi), 1e-3f * s.pdf);
-            const int ci = std::clamp(int((s.wi.z + 1.0f) * 0.5f * cos_bins), 0, cos_bins - 1);
-            double phi = std::atan2(s.wi.y, s.wi.x);
-            if (phi < 0) phi += 2 * M_PI;
-            const int pi = std::clamp(int(phi / (2 * M_PI) * phi_bins), 0, phi_bins - 1);
-            observed[size_t(ci * phi_bins + pi)] += 1;
+            observed[bins.index(s.wi)] += 1;
         }
-        for (int ci = 0; ci < cos_bins; ++ci)
-            for (int pi = 0; pi < phi_bins; ++pi) {
-                const double c0 = -1 + 2.0 * ci / cos_bins, c1 = -1 + 2.0 * (ci + 1) / cos_bins;
-                const double p0 = 2 * M_PI * pi / phi_bins, p1 = 2 * M_PI * (pi + 1) / phi_bins;
-                expected[size_t(ci * phi_bins + pi)] =
-                    n * integrate_sphere([&](const vec3& wi) { return double(brdf.pdf(wo, wi)); },
-                                         c0, c1, p0, p1);
-            }
+        const std::vector<double> expected =
+            bins.expected([&](const vec3& wi) { return double(brdf.pdf(wo, wi)); }, n);
         double chi2;
         const double p = test::chi_square_p_value(observed, expected, &chi2);
         EXPECT_GT(p, 1e-3) << "chi2 = " << chi2;

@@ -67,11 +67,12 @@ TEST(SingleScatterLobe, PdfIntegratesToOne) {
 }
 
 TEST(SingleScatterLobe, SamplesFollowTheirPdf) {
-    const int cos_bins = 16, phi_bins = 32, n = 200000;
+    const test::DirectionBins bins{16, 32, 0.0, 1.0};
+    const int n = 200000;
     for (const LobeCase& c : lobe_cases()) {
         SCOPED_TRACE(c.name);
         const SingleScatterLobe lobe(c.model, sun_direction(c.sun_from_normal_deg), kNormal);
-        std::vector<double> observed(size_t(cos_bins * phi_bins), 0.0), expected(observed.size());
+        std::vector<double> observed(bins.size(), 0.0);
         CounterRng rng(41, 0, 0, 0);
         for (int i = 0; i < n; ++i) {
             vec3 w;
@@ -79,18 +80,10 @@ TEST(SingleScatterLobe, SamplesFollowTheirPdf) {
             const float u1 = rng.next_float(), u2 = rng.next_float();
             if (!lobe.sample(u1, u2, &w, &weight)) continue;
             ASSERT_NEAR(weight, w.z / lobe.pdf(w), 1e-9 * weight);
-            const int ci = std::clamp(int(w.z * cos_bins), 0, cos_bins - 1);
-            double phi = std::atan2(w.y, w.x);
-            if (phi < 0) phi += 2 * M_PI;
-            const int pi = std::clamp(int(phi / (2 * M_PI) * phi_bins), 0, phi_bins - 1);
-            observed[size_t(ci * phi_bins + pi)] += 1;
+            observed[bins.index(w)] += 1;
         }
-        for (int ci = 0; ci < cos_bins; ++ci)
-            for (int pi = 0; pi < phi_bins; ++pi)
-                expected[size_t(ci * phi_bins + pi)] =
-                    n * integrate_sphere([&](const vec3& w) { return lobe.pdf(w); },
-                                         double(ci) / cos_bins, double(ci + 1) / cos_bins,
-                                         2 * M_PI * pi / phi_bins, 2 * M_PI * (pi + 1) / phi_bins);
+        const std::vector<double> expected =
+            bins.expected([&](const vec3& w) { return lobe.pdf(w); }, n);
         double chi2;
         const double p = test::chi_square_p_value(observed, expected, &chi2);
         EXPECT_GT(p, 1e-3) << "chi2 = " << chi2;
