@@ -94,13 +94,19 @@ struct BakeCounters {
 // A deeper vertex also learns from it which point and directional lights it sees occluded (a
 // bit each, as the texel filter's guide) and the tables' multiple scattering it left to the
 // field: the field's value holds only for points shadowed as its texel is.
+// At a texel of the bake (the baker passes one), the corrections travel apart in the same way
+// and `paired_tables` holds the tables' single scattering of the very connections whose
+// corrections were drawn, weighted alike: the filter applies their ratio to the texel's own
+// tables (texel_filter.h, filter_single_corrections).
 struct UnoccludedSingle {
     vec3 tables{0.0f}, correction{0.0f};
     uint64_t shadows = 0;
     vec3 left_multiple{0.0f};
+    vec3 paired_tables{0.0f};
     UnoccludedSingle& operator+=(const UnoccludedSingle& o) {
         tables += o.tables;
         correction += o.correction;
+        paired_tables += o.paired_tables;
         return *this;
     }
 };
@@ -146,7 +152,8 @@ class BakeEstimator {
     // result (the baker filters them over neighbouring texels; without it they are added).
     // mc_rate > 0: the rate of the receiver's Monte Carlo terms instead of
     // bake.texel_mc_rate (texel_filter.h's texel_mc_rates). `unoccluded`, when given, receives
-    // the receiver's UnoccludedSingle (the field's prepass).
+    // the receiver's UnoccludedSingle (the field's prepass, the baker's texels) and its
+    // single-scattering corrections, which are then not in the result.
     IrradianceParts estimate(const vec3& p, const vec3& n, const vec3& albedo, CounterRng& rng,
                              BakeCounters& counters, FixedDirect* fixed = nullptr,
                              IrradianceParts* deferred = nullptr, float mc_rate = -1.0f,
@@ -449,5 +456,21 @@ class BakeEstimator {
     mutable std::atomic<uint64_t> single_version_{~uint64_t(0)};
     double cosine_zh_[kImpulseOrder];
 };
+
+// Used by the texel terms (bake_lit_medium.cpp) and the walks (bake_walk.cpp).
+template <class Has>
+void BakeEstimator::emitter_keep(const std::vector<EmitterSample>& emitters, Has has,
+                                 std::vector<float>& keep) const {
+    thread_local std::vector<float> strength;
+    strength.assign(emitters.size(), 0.0f);
+    size_t count = 0;
+    for (size_t i = 0; i < emitters.size(); ++i)
+        if (has(i)) {
+            strength[i] = emitter_strength(emitters[i]);
+            ++count;
+        }
+    // One emitter with a term is kept for sure, whatever the others (which have none).
+    emitter_keep_probabilities(strength, count > 1 ? settings_.mc_emitter_budget : 0.0f, keep);
+}
 
 }  // namespace freqlab

@@ -45,6 +45,13 @@ double peak_rss_megabytes() {
     return double(usage.ru_maxrss) * 1024.0 / 1e6;
 }
 
+// Whether a texel's single-scattering corrections are filed apart and filtered as a ratio
+// (texel_filter.h, SingleCorrectionSums): impulse's texel Monte Carlo terms draw them.
+bool files_single_corrections(BakeMethod method, const BakeSettings& settings) {
+    return method == BakeMethod::Impulse && settings.single_correction &&
+           settings.lit_medium_depth >= 0;
+}
+
 }  // namespace
 
 std::vector<LayerSet> LightmapBaker::all_layers() const {
@@ -104,6 +111,10 @@ void LightmapBaker::reset() {
     sums_.assign(maps_.size(), {});
     for (size_t i = 0; i < maps_.size(); ++i) sums_[i].assign(maps_[i].texels.size(), {});
     deferred_sums_ = sums_;
+    single_sums_.assign(maps_.size(), {});
+    if (files_single_corrections(method_, settings_))
+        for (size_t i = 0; i < maps_.size(); ++i)
+            single_sums_[i].assign(maps_[i].texels.size(), {});
     share_shadows_.assign(maps_.size(), {});
     for (size_t i = 0; i < maps_.size(); ++i) share_shadows_[i].assign(maps_[i].texels.size(), 0);
     fixed_.assign(maps_.size(), {});  // media may have changed: computed afresh
@@ -159,12 +170,15 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
                 if (t.state != TexelState::Valid) continue;
                 // Summed sample by sample into the running total: the same additions in the
                 // same order whatever the split into passes.
+                UnoccludedSingle single;
+                UnoccludedSingle* files = single_sums_[mi].empty() ? nullptr : &single;
                 for (int s = first; s < first + samples; ++s) {
                     CounterRng rng = texel_random(settings_.seed, mi, i, s);
-                    sums_[mi][i] +=
-                        estimator_.estimate(t.position, t.normal, t.albedo, rng, counters,
-                                            &fixed_[mi][i], &deferred_sums_[mi][i], rates[i]);
+                    sums_[mi][i] += estimator_.estimate(t.position, t.normal, t.albedo, rng,
+                                                        counters, &fixed_[mi][i],
+                                                        &deferred_sums_[mi][i], rates[i], files);
                 }
+                if (files) single_sums_[mi][i] += single;
             }
             rays += counters.rays;
             queries += counters.impulse_queries;
@@ -216,6 +230,7 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
         bytes += maps_[m].texels.size() * sizeof(LightmapTexel) +
                  maps_[m].triangle_uv.size() * sizeof(vec2) +
                  (sums_[m].size() + deferred_sums_[m].size()) * sizeof(IrradianceParts) +
+                 single_sums_[m].size() * sizeof(SingleCorrectionSums) +
                  fixed_[m].size() * sizeof(BakeEstimator::FixedDirect);
     stats_.storage_mb = double(bytes) / 1e6;
     stats_.peak_rss_mb = peak_rss_megabytes();
@@ -256,6 +271,8 @@ std::string LightmapBaker::encode_share() const {
         [&](size_t mi, size_t at, size_t n) {
             w.put_bytes(&sums_[mi][at], n * sizeof(IrradianceParts));
             w.put_bytes(&deferred_sums_[mi][at], n * sizeof(IrradianceParts));
+            if (!single_sums_[mi].empty())
+                w.put_bytes(&single_sums_[mi][at], n * sizeof(SingleCorrectionSums));
             TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
             for (size_t x = 0; x < n; ++x)
                 set_texel_filter_guide(guide, x, fixed_[mi][at + x], sums_[mi][at + x]);
@@ -279,6 +296,8 @@ void LightmapBaker::add_share(const std::string& bytes, int index, const std::st
         [&](size_t mi, size_t at, size_t n) {
             r.get_bytes(&sums_[mi][at], n * sizeof(IrradianceParts));
             r.get_bytes(&deferred_sums_[mi][at], n * sizeof(IrradianceParts));
+            if (!single_sums_[mi].empty())
+                r.get_bytes(&single_sums_[mi][at], n * sizeof(SingleCorrectionSums));
             r.get_bytes(&share_shadows_[mi][at], n * sizeof(uint64_t));
         },
         [&](size_t i) { r.get_bytes(&probe_sums_[i], sizeof(BakeEstimator::ProbeParts)); });
@@ -339,6 +358,8 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
     const int radius = texel_filter_radius(estimator);
     // The texel and the window the baker's filter reads, re-run with the bake's keys.
     std::vector<IrradianceParts> sums(n), deferred(n);
+    const bool files = files_single_corrections(estimator.method(), estimator.settings());
+    std::vector<SingleCorrectionSums> single(files ? n : 0);
     TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
     const int x0 = int(texel % size_t(map.width)), y0 = int(texel / size_t(map.width));
     const std::vector<float> rates = texel_mc_rates(map, estimator);
@@ -349,18 +370,22 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
             const LightmapTexel& t = map.texels.at(j);
             if (t.state != TexelState::Valid && j != texel) continue;
             BakeEstimator::FixedDirect fixed;
+            UnoccludedSingle unoccluded;
             for (int s = 0; s < spp; ++s) {
                 CounterRng rng = texel_random(seed, lightmap, j, s);
-                sums[j] += estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
-                                              &deferred[j], rates[j]);
+                sums[j] +=
+                    estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
+                                       &deferred[j], rates[j], files ? &unoccluded : nullptr);
             }
+            if (files) single[j] += unoccluded;
             set_texel_filter_guide(guide, j, fixed, sums[j]);
         }
     IrradianceParts sum = sums[texel];
-    if (radius <= 0 || map.texels[texel].state != TexelState::Valid)
-        sum += deferred[texel];
-    else
-        sum += mean_of_texels(deferred, texel_filter_neighbours(map, guide, texel, radius));
+    const bool filtered = radius > 0 && map.texels[texel].state == TexelState::Valid;
+    const std::vector<size_t> near =
+        filtered ? texel_filter_neighbours(map, guide, texel, radius) : std::vector<size_t>{texel};
+    sum += filtered ? mean_of_texels(deferred, near) : deferred[texel];
+    if (files) sum.single += ratio_correction(single, texel, near);
     const float inv = spp > 0 ? 1.0f / float(spp) : 0.0f;
     sum.surface *= inv;
     sum.single *= inv;
@@ -382,11 +407,16 @@ LayerSet LightmapBaker::layers(size_t mi) const {
     }
     const std::vector<IrradianceParts> deferred =
         filter_texel_sums(map, deferred_sums_[mi], guide, texel_filter_radius(estimator_));
+    const std::vector<vec3> corrections =
+        single_sums_[mi].empty() ? std::vector<vec3>()
+                                 : filter_single_corrections(map, single_sums_[mi], guide,
+                                                             texel_filter_radius(estimator_));
     for (size_t i = 0; i < n; ++i) {
         const LightmapTexel& t = map.texels[i];
         if (t.state != TexelState::Valid) continue;
         IrradianceParts p = sums_[mi][i];
         p += deferred[i];
+        if (!corrections.empty()) p.single += corrections[i];
         const vec3 e = p.total() * inv;
         const vec3 k = t.albedo * kInvPi * inv;
         const vec3 out[5] = {k * p.total(), e, p.surface * inv, p.single * inv, p.multiple * inv};

@@ -20,6 +20,7 @@
 #include "image/metrics.h"
 #include "volume/bake_estimators.h"
 #include "volume/lightmap_atlas.h"
+#include "volume/texel_filter.h"
 #include "volume/vertex_corrections.h"
 
 namespace freqlab {
@@ -97,6 +98,9 @@ class LightmapBaker {
     // The same for the texels' deferred Monte Carlo terms (impulse), filtered over
     // neighbouring texels when the layers are made (volume/texel_filter.h).
     std::vector<std::vector<IrradianceParts>> deferred_sums_;
+    // And their single-scattering corrections, filtered as a ratio (texel_filter.h); empty
+    // unless files_single_corrections().
+    std::vector<std::vector<SingleCorrectionSums>> single_sums_;
     // Per lightmap, per texel: the rate of its Monte Carlo terms (texel_filter.h), made by the
     // first pass.
     std::vector<std::vector<float>> mc_rates_;

@@ -101,4 +101,30 @@ std::vector<IrradianceParts> filter_texel_sums(const ObjectLightmap& map,
     return out;
 }
 
+vec3 ratio_correction(const std::vector<SingleCorrectionSums>& sums, size_t i,
+                      const std::vector<size_t>& near) {
+    vec3 corrections(0.0f), paired(0.0f);
+    for (size_t j : near) {
+        corrections += sums[j].corrections;
+        paired += sums[j].paired_tables;
+    }
+    vec3 out(0.0f);
+    for (int c = 0; c < 3; ++c)
+        if (paired[c] > 0.0f) out[c] = sums[i].tables[c] * (corrections[c] / paired[c]);
+    return out;
+}
+
+std::vector<vec3> filter_single_corrections(const ObjectLightmap& map,
+                                            const std::vector<SingleCorrectionSums>& sums,
+                                            const TexelFilterGuide& guide, int radius) {
+    std::vector<vec3> out(sums.size(), vec3(0.0f));
+    tbb::parallel_for(size_t(0), sums.size(), [&](size_t i) {
+        if (map.texels[i].state != TexelState::Valid) return;
+        const std::vector<size_t> near =
+            radius > 0 ? texel_filter_neighbours(map, guide, i, radius) : std::vector<size_t>{i};
+        out[i] = ratio_correction(sums, i, near);
+    });
+    return out;
+}
+
 }  // namespace freqlab

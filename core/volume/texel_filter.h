@@ -57,6 +57,33 @@ int texel_filter_capacity(const ObjectLightmap& map, size_t i, int radius);
 // 0.36 / 0.29 / 0.19): 8 has the least error x time.
 constexpr float kMaxMcRateBoost = 8.0f;
 std::vector<float> texel_mc_rates(const ObjectLightmap& map, const BakeEstimator& estimator);
+// A texel's single-scattering corrections of its unoccluded connections (impulse), summed
+// apart from its other Monte Carlo terms: the tables' single scattering of those connections on
+// every path, and the corrections drawn (at the texel's Monte Carlo rate, by emitter roulette)
+// beside the tables' value of their own connections, weighted alike (UnoccludedSingle). The
+// filter applies the ratio of the corrections to those tables, summed over the texel's window,
+// to the texel's own tables: a texel in a gap under a house (its rare unoccluded environment
+// samples' corrections about minus their tables' value) reads about 0, not the tables of every
+// path plus one correction at weight 1 / rate (-1.5 where VPT reads 0 on valley at 4
+// texels/unit).
+struct SingleCorrectionSums {
+    vec3 tables{0.0f}, paired_tables{0.0f}, corrections{0.0f};
+    SingleCorrectionSums& operator+=(const UnoccludedSingle& u) {
+        tables += u.tables;
+        paired_tables += u.paired_tables;
+        corrections += u.correction;
+        return *this;
+    }
+};
+// Texel i's correction: its tables x, per channel, the corrections over their tables summed
+// over `near` (0 where those tables are 0: no correction drawn there).
+vec3 ratio_correction(const std::vector<SingleCorrectionSums>& sums, size_t i,
+                      const std::vector<size_t>& near);
+// Every texel's (invalid ones: zero), over the windows of filter_texel_sums; with radius 0, over
+// the texel alone.
+std::vector<vec3> filter_single_corrections(const ObjectLightmap& map,
+                                            const std::vector<SingleCorrectionSums>& sums,
+                                            const TexelFilterGuide& guide, int radius);
 // The texels filter_texel_sums averages for texel i (i itself among them); with `among`, only
 // the texels it flags (the vertex correction field's computed texels).
 std::vector<size_t> texel_filter_neighbours(const ObjectLightmap& map,

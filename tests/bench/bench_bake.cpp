@@ -5,11 +5,13 @@
 //   ./build/tests/freqlab_benchmarks --benchmark_filter=BakePath
 //   BENCH_BAKE_SCENE=scenes/smoke_room.json ./build/tests/freqlab_benchmarks
 //   --benchmark_filter=BakePath
+//   BENCH_BAKE_SET="texel_mc_rate=0 single_correction=false" (bake settings by key, as --set)
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
 #include <map>
 #include <memory>
+#include <sstream>
 
 #include "scene/scene_loader.h"
 #include "volume/impulse_irradiance.h"
@@ -39,6 +41,21 @@ struct BakeFixture {
     }
 };
 
+// The estimator's settings: BakeSettings{} with BENCH_BAKE_SET's "key=value" words applied,
+// so that one term's cost is the difference of two runs.
+BakeSettings bench_settings() {
+    BakeSettings settings;
+    const char* words = std::getenv("BENCH_BAKE_SET");
+    std::istringstream in(words ? words : "");
+    for (std::string word; in >> word;) {
+        const size_t eq = word.find('=');
+        if (eq == std::string::npos) throw std::runtime_error("BENCH_BAKE_SET: expected key=value");
+        BakeSettings::schema().set_from_string(&settings, word.substr(0, eq), word.substr(eq + 1),
+                                               "BENCH_BAKE_SET");
+    }
+    return settings;
+}
+
 BakeFixture& fixture() {
     static BakeFixture f;
     return f;
@@ -47,7 +64,7 @@ BakeFixture& fixture() {
 void BM_BakePath(benchmark::State& state) {
     BakeFixture& f = fixture();
     const BakeMethod method = BakeMethod(state.range(0));
-    const BakeEstimator estimator(f.rays, f.media, &f.tables, method, BakeSettings{});
+    const BakeEstimator estimator(f.rays, f.media, &f.tables, method, bench_settings());
     BakeCounters counters;
     // As the baker: each texel's fixed direct light is computed on its first path only.
     std::vector<BakeEstimator::FixedDirect> fixed(f.texels.size());
