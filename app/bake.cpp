@@ -48,10 +48,9 @@ json error_against(const fs::path& reference_dir, const std::string& name, const
                              {"luminance", t.test},
                              {"reference_luminance", t.ref},
                              {"relmse_share", t.relmse_share}});
-        out[layer] = {{"relmse", e.relmse},
-                      {"rmse", e.rmse},
-                      {"rel_l2", e.rel_l2},
-                      {"texels", e.texels},
+        out[layer] = {{"relmse", e.relmse},         {"relmse_lit", e.relmse_lit},
+                      {"texels_lit", e.texels_lit}, {"rmse", e.rmse},
+                      {"rel_l2", e.rel_l2},         {"texels", e.texels},
                       {"worst_texels", worst}};
     }
     if (ref.layers.find("lm_inscatter_single") && test.find("lm_inscatter_single")) {

@@ -50,29 +50,38 @@ namespace {
 
 struct CurvePoint {
     int samples;
-    double ms, relmse;
+    double ms, relmse, relmse_lit;
 };
 
-double relmse_against(const LightmapBaker& baker, const LightmapBaker& reference) {
-    double sum = 0.0;
-    long texels = 0;
+// lm_irradiance's relMSE over all lightmaps' valid texels and over their lit ones
+// (LightmapError::relmse_lit), texel-weighted.
+struct RelMse {
+    double all = 0.0, lit = 0.0;
+};
+RelMse relmse_against(const LightmapBaker& baker, const LightmapBaker& reference) {
+    double sum = 0.0, sum_lit = 0.0;
+    long texels = 0, texels_lit = 0;
     for (size_t i = 0; i < baker.lightmaps().size(); ++i) {
         const LightmapError e =
             compare_lightmaps(baker.layers(i), reference.layers(i), "lm_irradiance");
         sum += e.relmse * double(e.texels);
         texels += e.texels;
+        sum_lit += e.relmse_lit * double(e.texels_lit);
+        texels_lit += e.texels_lit;
     }
-    return texels > 0 ? sum / double(texels) : 0.0;
+    return {texels > 0 ? sum / double(texels) : 0.0,
+            texels_lit > 0 ? sum_lit / double(texels_lit) : 0.0};
 }
 
 std::vector<CurvePoint> curve(LightmapBaker& baker, const LightmapBaker& reference, int max_spp) {
     std::vector<CurvePoint> points;
     for (int n = 1; baker.samples() < max_spp; n *= 2) {
         baker.run_pass(std::min(n, max_spp - baker.samples()));
-        points.push_back(
-            {baker.samples(), baker.stats().bake_ms, relmse_against(baker, reference)});
-        std::fprintf(stderr, "  %-10s %6d spp %9.1f ms relMSE %.5f\n", to_string(baker.method()),
-                     baker.samples(), baker.stats().bake_ms, points.back().relmse);
+        const RelMse e = relmse_against(baker, reference);
+        points.push_back({baker.samples(), baker.stats().bake_ms, e.all, e.lit});
+        std::fprintf(stderr, "  %-10s %6d spp %9.1f ms relMSE %.5f (lit texels %.5f)\n",
+                     to_string(baker.method()), baker.samples(), baker.stats().bake_ms, e.all,
+                     e.lit);
     }
     return points;
 }
@@ -177,7 +186,7 @@ int run_bench_bake(const BenchArgs& a) {
     LightmapBaker impulse(rays, media, &tables, BakeMethod::Impulse, settings);
     LightmapBaker extinction(rays, media, nullptr, BakeMethod::Extinction, settings);
     LightmapBaker vpt(rays, media, nullptr, BakeMethod::Vpt, settings);
-    std::vector<CurvePoint> c_impulse{{0, 0.0, NAN}}, c_extinction{{0, 0.0, NAN}}, c_vpt;
+    std::vector<CurvePoint> c_impulse{{0, 0.0, NAN, NAN}}, c_extinction{{0, 0.0, NAN, NAN}}, c_vpt;
     if (curves) {
         std::fprintf(stderr, "reference: vpt at %d spp\n", a.reference_spp);
         reference.run_pass(a.reference_spp);
@@ -255,7 +264,10 @@ int run_bench_bake(const BenchArgs& a) {
     auto curve_json = [](const std::vector<CurvePoint>& c) {
         json j = json::array();
         for (const CurvePoint& p : c)
-            j.push_back({{"spp", p.samples}, {"ms", p.ms}, {"relmse", p.relmse}});
+            j.push_back({{"spp", p.samples},
+                         {"ms", p.ms},
+                         {"relmse", p.relmse},
+                         {"relmse_lit", p.relmse_lit}});
         return j;
     };
     const json report = {
@@ -342,8 +354,8 @@ json thickness_row(const BenchArgs& a, BakeStudy& study, const ImpulseTables& ta
     impulse.run_pass(a.max_spp);
     LightmapBaker extinction(rays, media, nullptr, BakeMethod::Extinction, study.settings);
     extinction.run_pass(a.max_spp);
-    const double e_impulse = relmse_against(impulse, reference);
-    const double e_extinction = relmse_against(extinction, reference);
+    const double e_impulse = relmse_against(impulse, reference).all;
+    const double e_extinction = relmse_against(extinction, reference).all;
     const double m_ref = layer_sum(reference, "lm_inscatter_multiple");
     const double m_ratio = m_ref > 0.0 ? layer_sum(impulse, "lm_inscatter_multiple") / m_ref : NAN;
     const RegionComparison sh_i = shadowed_against(impulse, reference, rays);

@@ -179,4 +179,7 @@ TEST(LightmapMeasures, WorstTexelsAreTheLargestRelMseTerms) {
     const double dark_term = 3 * 1e-4 / (eps * eps), bright_term = 3 * 0.25;
     EXPECT_NEAR(e.worst[0].relmse_share, dark_term / (dark_term + bright_term), 1e-5);
     EXPECT_NEAR(e.relmse, (dark_term + bright_term) / (3.0 * w * h), 1e-3);
+    // Over the lit texels (reference >= 2 % of its mean) the dark one does not count.
+    EXPECT_EQ(e.texels_lit, w * h - 1);
+    EXPECT_NEAR(e.relmse_lit, 3 * 0.25 / (1.0 + eps * eps) / (3.0 * (w * h - 1)), 1e-12);
 }

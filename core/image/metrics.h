@@ -21,6 +21,10 @@ namespace freqlab {
 // units, 1e-2 to 1e2): eps relative to the reference's mean (lightmap_baker.h).
 constexpr double kImageRelMseEpsilon = 0.01;
 constexpr double kLightmapRelMseEpsilonOfMean = 1e-3;
+// relMSE's companion over the lit texels only: those whose reference reaches this fraction of
+// its mean (near-black reference texels weigh up to 1 / e^2 = 1e6 / mean^2 in relMSE, so a
+// handful of them, lit by one rare path of a test run, rule it for every method).
+constexpr double kLightmapLitTexelFractionOfMean = 0.02;
 
 struct ImageMetrics {
     double rmse = 0, relmse = 0, ssim = 1, max_abs = 0;

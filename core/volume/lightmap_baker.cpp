@@ -495,22 +495,28 @@ LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref, const
     mean_ref /= double(e.texels) * ch;
     const double eps = kLightmapRelMseEpsilonOfMean * mean_ref;
     const double eps2 = eps * eps + 1e-30;
-    double rel = 0.0, sq = 0.0, ref2 = 0.0;
+    double rel = 0.0, sq = 0.0, ref2 = 0.0, rel_lit = 0.0;
     std::vector<std::pair<double, size_t>> terms;  // (the texel's relmse term, texel)
     for (size_t i = 0; i < ref.pixel_count(); ++i) {
         if (!measured(valid, only, i)) continue;
-        double texel_rel = 0.0;
+        double texel_rel = 0.0, texel_ref = 0.0;
         for (int c = 0; c < ch; ++c) {
             const double r = b.data[i * b.channels + c], t = a.data[i * a.channels + c];
             texel_rel += (t - r) * (t - r) / (r * r + eps2);
             sq += (t - r) * (t - r);
             ref2 += r * r;
+            texel_ref += r;
         }
         rel += texel_rel;
+        if (texel_ref >= kLightmapLitTexelFractionOfMean * mean_ref * ch) {
+            rel_lit += texel_rel;
+            ++e.texels_lit;
+        }
         if (worst > 0) terms.emplace_back(texel_rel, i);
     }
     const double n = double(e.texels) * ch;
     e.relmse = rel / n;
+    e.relmse_lit = e.texels_lit > 0 ? rel_lit / (double(e.texels_lit) * ch) : 0.0;
     const size_t listed = std::min(worst, terms.size());
     std::partial_sort(terms.begin(), terms.begin() + long(listed), terms.end(),
                       [](const auto& p, const auto& q) { return p.first > q.first; });

@@ -157,9 +157,11 @@ struct TexelError {
     double test = 0.0, ref = 0.0;  // luminance
     double relmse_share = 0.0;     // the texel's part of relmse (all shares sum to 1)
 };
+// relmse_lit: the same over the texels whose reference (mean of channels) reaches
+// kLightmapLitTexelFractionOfMean of its mean, texels_lit of them.
 struct LightmapError {
-    double relmse = 0.0, rmse = 0.0, rel_l2 = 0.0;
-    long texels = 0;
+    double relmse = 0.0, rmse = 0.0, rel_l2 = 0.0, relmse_lit = 0.0;
+    long texels = 0, texels_lit = 0;
     std::vector<TexelError> worst;
 };
 // Throws Error when sizes differ or a layer is missing. `only` (one flag per texel), when
