@@ -384,8 +384,7 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
     const bool filtered = radius > 0 && map.texels[texel].state == TexelState::Valid;
     const std::vector<size_t> near =
         filtered ? texel_filter_neighbours(map, guide, texel, radius) : std::vector<size_t>{texel};
-    sum += filtered ? mean_of_texels(deferred, near) : deferred[texel];
-    if (files) sum.single += ratio_correction(single, texel, near);
+    sum += filtered_texel_terms(deferred, files ? &single : nullptr, texel, near);
     const float inv = spp > 0 ? 1.0f / float(spp) : 0.0f;
     sum.surface *= inv;
     sum.single *= inv;
@@ -406,17 +405,13 @@ LayerSet LightmapBaker::layers(size_t mi) const {
         guide.shadows[i] |= share_shadows_[mi][i];
     }
     const std::vector<IrradianceParts> deferred =
-        filter_texel_sums(map, deferred_sums_[mi], guide, texel_filter_radius(estimator_));
-    const std::vector<vec3> corrections =
-        single_sums_[mi].empty() ? std::vector<vec3>()
-                                 : filter_single_corrections(map, single_sums_[mi], guide,
-                                                             texel_filter_radius(estimator_));
+        filter_texel_sums(map, deferred_sums_[mi], guide, texel_filter_radius(estimator_),
+                          single_sums_[mi].empty() ? nullptr : &single_sums_[mi]);
     for (size_t i = 0; i < n; ++i) {
         const LightmapTexel& t = map.texels[i];
         if (t.state != TexelState::Valid) continue;
         IrradianceParts p = sums_[mi][i];
         p += deferred[i];
-        if (!corrections.empty()) p.single += corrections[i];
         const vec3 e = p.total() * inv;
         const vec3 k = t.albedo * kInvPi * inv;
         const vec3 out[5] = {k * p.total(), e, p.surface * inv, p.single * inv, p.multiple * inv};

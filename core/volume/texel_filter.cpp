@@ -92,11 +92,19 @@ IrradianceParts mean_of_texels(const std::vector<IrradianceParts>& sums,
 
 std::vector<IrradianceParts> filter_texel_sums(const ObjectLightmap& map,
                                                const std::vector<IrradianceParts>& sums,
-                                               const TexelFilterGuide& guide, int radius) {
-    if (radius <= 0) return sums;
+                                               const TexelFilterGuide& guide, int radius,
+                                               const std::vector<SingleCorrectionSums>* single) {
+    if (radius <= 0 && !single) return sums;
     std::vector<IrradianceParts> out(sums.size());
     tbb::parallel_for(size_t(0), sums.size(), [&](size_t i) {
-        out[i] = mean_of_texels(sums, texel_filter_neighbours(map, guide, i, radius));
+        if (radius <= 0) {
+            out[i] = map.texels[i].state == TexelState::Valid
+                         ? filtered_texel_terms(sums, single, i, {i})
+                         : sums[i];
+            return;
+        }
+        out[i] =
+            filtered_texel_terms(sums, single, i, texel_filter_neighbours(map, guide, i, radius));
     });
     return out;
 }
@@ -114,16 +122,11 @@ vec3 ratio_correction(const std::vector<SingleCorrectionSums>& sums, size_t i,
     return out;
 }
 
-std::vector<vec3> filter_single_corrections(const ObjectLightmap& map,
-                                            const std::vector<SingleCorrectionSums>& sums,
-                                            const TexelFilterGuide& guide, int radius) {
-    std::vector<vec3> out(sums.size(), vec3(0.0f));
-    tbb::parallel_for(size_t(0), sums.size(), [&](size_t i) {
-        if (map.texels[i].state != TexelState::Valid) return;
-        const std::vector<size_t> near =
-            radius > 0 ? texel_filter_neighbours(map, guide, i, radius) : std::vector<size_t>{i};
-        out[i] = ratio_correction(sums, i, near);
-    });
+IrradianceParts filtered_texel_terms(const std::vector<IrradianceParts>& sums,
+                                     const std::vector<SingleCorrectionSums>* single, size_t i,
+                                     const std::vector<size_t>& near) {
+    IrradianceParts out = mean_of_texels(sums, near);
+    if (single) out.single += ratio_correction(*single, i, near);
     return out;
 }
 

@@ -37,10 +37,14 @@ void set_texel_filter_guide(TexelFilterGuide& guide, size_t i,
                             const BakeEstimator::FixedDirect& fixed, const IrradianceParts& sum);
 // The radius the baker filters `estimator`'s deferred terms with (0 unless impulse).
 int texel_filter_radius(const BakeEstimator& estimator);
+struct SingleCorrectionSums;
 // The filtered sums, one per texel (invalid texels: zero). sums.size() == map.texels.size().
-std::vector<IrradianceParts> filter_texel_sums(const ObjectLightmap& map,
-                                               const std::vector<IrradianceParts>& sums,
-                                               const TexelFilterGuide& guide, int radius);
+// With `single`, each texel's single scattering also gets its ratio_correction over the same
+// window (radius 0: the texel alone).
+std::vector<IrradianceParts> filter_texel_sums(
+    const ObjectLightmap& map, const std::vector<IrradianceParts>& sums,
+    const TexelFilterGuide& guide, int radius,
+    const std::vector<SingleCorrectionSums>* single = nullptr);
 // The mean of sums over the texels `near` (zero when none).
 IrradianceParts mean_of_texels(const std::vector<IrradianceParts>& sums,
                                const std::vector<size_t>& near);
@@ -79,11 +83,11 @@ struct SingleCorrectionSums {
 // over `near` (0 where those tables are 0: no correction drawn there).
 vec3 ratio_correction(const std::vector<SingleCorrectionSums>& sums, size_t i,
                       const std::vector<size_t>& near);
-// Every texel's (invalid ones: zero), over the windows of filter_texel_sums; with radius 0, over
-// the texel alone.
-std::vector<vec3> filter_single_corrections(const ObjectLightmap& map,
-                                            const std::vector<SingleCorrectionSums>& sums,
-                                            const TexelFilterGuide& guide, int radius);
+// Texel i's filtered terms over `near`: the mean of its sums, plus with `single` its
+// ratio_correction (what filter_texel_sums stores, and --debug-texel prints).
+IrradianceParts filtered_texel_terms(const std::vector<IrradianceParts>& sums,
+                                     const std::vector<SingleCorrectionSums>* single, size_t i,
+                                     const std::vector<size_t>& near);
 // The texels filter_texel_sums averages for texel i (i itself among them); with `among`, only
 // the texels it flags (the vertex correction field's computed texels).
 std::vector<size_t> texel_filter_neighbours(const ObjectLightmap& map,
