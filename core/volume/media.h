@@ -65,8 +65,10 @@ class DensityGrid {
     // one voxel (a height-fog ramp marches in z only; same values, so the same integrals), with
     // a border of one empty voxel on every side.
     vec3 march_voxel_;
+    glm::dvec3 march_inv_voxel_;
     ivec3 march_res_;
     std::vector<float> march_voxels_;
+    bool int32_indices_ = false;  // the padded grid's indices fit an int (the AVX2 loop's)
     // Grids that vary along one axis only: that axis, its values and their prefix integrals
     // (prefix_[k] = sum over cells j < k of value x cell size); line_axis_ < 0 otherwise.
     int line_axis_ = -1;

@@ -276,7 +276,7 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
         const float inv = packed.scale > 0.0f ? 1.0f / packed.scale : 0.0f;
         const float inv_ratio = packed.ratio_scale > 0.0f ? 1.0f / packed.ratio_scale : 0.0f;
         packed.halves.resize(n * kHalvesPerTexel);
-        packed.straddles.assign((n + 63) / 64, 0);
+        packed.straddles.assign((n + 63) / 64, {});
         for (size_t i = 0; i < n; ++i) {
             uint16_t* h = &packed.halves[i * kHalvesPerTexel];
             for (size_t c = 0; c < 9; ++c)
@@ -290,12 +290,17 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
             const bool filled = states[i] == TexelState::Valid || states[i] == TexelState::Dilated;
             if (filled && v[i * kChannels + kStraddles] > 0.0f) {
                 const float* e = &v[i * kChannels + kCentre];
-                packed.straddles[i / 64] |= uint64_t(1) << (i % 64);
+                packed.straddles[i / 64].bits |= uint64_t(1) << (i % 64);
                 const bool mixed = states[i] == TexelState::Valid && cover[i].mixed;
                 packed.centres.push_back(
                     {uint32_t(i), vec3(e[0], e[1], e[2]), e[3], mixed, mixed && cover[i].centre});
                 straddling += states[i] == TexelState::Valid;
             }
+        }
+        uint32_t before = 0;
+        for (PackedMap::StraddleWord& w : packed.straddles) {
+            w.before = before;
+            before += uint32_t(__builtin_popcountll(w.bits));
         }
     }
     rays_ = rays_cast;
@@ -321,12 +326,11 @@ VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit
     const size_t k = size_t(y) * size_t(map.width) + size_t(x);
     // Geometry crosses this texel: its value holds for the side its centre is on (one ray, on
     // the few hits that land on such texels).
-    if (map.straddles[k / 64] >> (k % 64) & 1) {
-        const auto it =
-            std::lower_bound(map.centres.begin(), map.centres.end(), uint32_t(k),
-                             [](const StraddlingTexel& e, uint32_t key) { return e.texel < key; });
-        if (it != map.centres.end() && it->texel == k &&
-            (!sees(
+    const PackedMap::StraddleWord& word = map.straddles[k / 64];
+    if (word.bits >> (k % 64) & 1) {
+        const uint64_t below = word.bits & ((uint64_t(1) << (k % 64)) - 1);
+        const StraddlingTexel* it = &map.centres[word.before + size_t(__builtin_popcountll(below))];
+        if ((!sees(
                  *scene_,
                  spawn_point(hit.position + hit.geometric_normal * it->lift, hit.geometric_normal),
                  it->lifted_centre) ||

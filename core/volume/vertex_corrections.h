@@ -142,8 +142,15 @@ class VertexCorrectionField {
         int width = 0, height = 0;
         float scale = 0.0f, ratio_scale = 0.0f;
         std::vector<uint16_t> halves;
-        // Texels crossed by geometry (a bit each) and their centres, by texel index.
-        std::vector<uint64_t> straddles;
+        // Texels crossed by geometry: a bit each, 64 to a word, beside the number of straddling
+        // texels in the words before it (the rank of a texel's entry in `centres`, which are
+        // in texel order). One cache line answers both: a binary search over the centres was
+        // 19 dependent misses on valley's houses (0.9 s of a 50 s bake).
+        struct StraddleWord {
+            uint64_t bits = 0;
+            uint32_t before = 0;
+        };
+        std::vector<StraddleWord> straddles;
         std::vector<StraddlingTexel> centres;
     };
     std::vector<PackedMap> packed_;

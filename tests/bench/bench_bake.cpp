@@ -135,10 +135,11 @@ void BM_MediaIntegrate(benchmark::State& state) {
         h = h * 6364136223846793005ULL + 1442695040888963407ULL;
         return float(h >> 40) * (1.0f / float(1 << 24));
     };
+    const double length = std::getenv("BENCH_LEN") ? std::atof(std::getenv("BENCH_LEN")) : 2.0;
     for (auto _ : state) {
         const vec3 o = lo + (hi - lo) * vec3(next(), next(), next());
         const vec3 d = glm::normalize(vec3(next() - 0.5f, next() - 0.5f, next() - 0.5f));
-        benchmark::DoNotOptimize(f.media.integrate(o, d, 2.0));
+        benchmark::DoNotOptimize(f.media.integrate(o, d, length));
     }
 }
 
