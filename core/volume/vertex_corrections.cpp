@@ -154,8 +154,8 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
         int& of_object = map_of_object_[size_t(map.object)];
         of_object = of_object == -1 ? int(mi) : kSeveralPages;
         triangles_[mi].resize(map.triangle_uv.size() / 3);
-        for (size_t t = 0; t < triangles_[mi].size(); ++t)
-            triangles_[mi][t] = triangle_to_texels(rays, map, t);
+        tbb::parallel_for(size_t(0), triangles_[mi].size(),
+                          [&](size_t t) { triangles_[mi][t] = triangle_to_texels(rays, map, t); });
         const size_t n = map.texels.size();
         std::vector<IrradianceParts> deferred(n);
         std::vector<UnoccludedSingle> unoccluded(n);
@@ -203,10 +203,10 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
             if (valid(i) && int(i % size_t(w)) % stride == 0 && int(i / size_t(w)) % stride == 0)
                 run(i);
         });
-        std::vector<size_t> missing;
         std::vector<std::vector<size_t>> sources(n);
-        for (size_t i = 0; i < n; ++i) {
-            if (!valid(i) || done[i]) continue;
+        std::vector<char> runs_itself(n, 0);
+        tbb::parallel_for(size_t(0), n, [&](size_t i) {
+            if (!valid(i) || done[i]) return;
             const int x0 = int(i % size_t(w)), y0 = int(i / size_t(w));
             for (int y = std::max(0, y0 - stride + 1);
                  y <= std::min(map.height - 1, y0 + stride - 1); ++y)
@@ -222,8 +222,11 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
                        gated[j] != gated[sources[i].front()];
             });
             if (mixed) sources[i].clear();
-            if (sources[i].empty()) missing.push_back(i);
-        }
+            runs_itself[i] = sources[i].empty();
+        });
+        std::vector<size_t> missing;
+        for (size_t i = 0; i < n; ++i)
+            if (runs_itself[i]) missing.push_back(i);
         tbb::parallel_for(size_t(0), missing.size(), [&](size_t k) { run(missing[k]); });
         filter_computed(map, done, guide, same_surface, deferred, unoccluded);
         for (size_t i = 0; i < n; ++i) {
