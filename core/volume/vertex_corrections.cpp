@@ -68,6 +68,11 @@ float straddle_lift(const ObjectLightmap& map, size_t i) {
     return kStraddleLift / map.density_at(i);
 }
 
+// Texel i's centre, as high above its surface (where its straddle rays start).
+vec3 lifted_centre(const ObjectLightmap& map, size_t i) {
+    return map.texels[i].position + map.texels[i].normal * straddle_lift(map, i);
+}
+
 // Whether geometry crosses texel i's footprint (a wall standing on a roof's underside: the
 // eave outside, the attic inside, one texel at low density). Four rays along the surface from
 // the texel's centre, lifted, to its footprint's corners.
@@ -123,6 +128,173 @@ bool uses_vertex_corrections(BakeMethod method, const BakeSettings& settings,
            settings.lit_medium_depth >= 0 && tables && !media.empty();
 }
 
+// One map's prepass: the computed texels' Monte Carlo terms, filtered, and the others' from
+// their sources, with what the packing needs of the texels' geometry.
+struct VertexCorrectionField::MapTerms {
+    std::vector<IrradianceParts> deferred;
+    std::vector<UnoccludedSingle> unoccluded;
+    std::vector<char> gated, straddles;
+    std::vector<Cover> cover;
+    TexelFilterGuide guide;
+};
+
+VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
+    const RayScene& rays, const BakeEstimator& estimator, const ObjectLightmap& map, uint64_t key,
+    int seed, std::atomic<long>& rays_cast, std::atomic<long>& computed) const {
+    const size_t n = map.texels.size();
+    MapTerms m;
+    m.deferred.resize(n);
+    m.unoccluded.resize(n);
+    m.gated.assign(n, 0);
+    m.straddles.assign(n, 0);
+    m.cover.resize(n);
+    m.guide = TexelFilterGuide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
+    std::vector<char> done(n, 0);
+    auto run = [&](size_t i) {
+        const LightmapTexel& t = map.texels[i];
+        BakeCounters counters;
+        BakeEstimator::FixedDirect fixed;
+        IrradianceParts sum;
+        for (int s = 0; s < paths_; ++s) {
+            CounterRng rng = texel_random(seed, key, i, s);
+            sum += estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
+                                      &m.deferred[i], -1.0f, &m.unoccluded[i]);
+        }
+        set_texel_filter_guide(m.guide, i, fixed, sum);
+        m.gated[i] = fixed.known;  // its lights' shadows known (exact tracking)
+        done[i] = 1;
+        rays_cast += counters.rays;
+        ++computed;
+    };
+    const int w = map.width, stride = kFieldStride;
+    auto valid = [&](size_t i) { return map.texels[i].state == TexelState::Valid; };
+    tbb::parallel_for(size_t(0), n, [&](size_t i) {
+        if (!valid(i)) return;
+        m.cover[i] = cover_of(rays, map, i);
+        m.straddles[i] = m.cover[i].mixed || straddles_geometry(rays, map, i);
+    });
+    // Neighbours in the atlas stand for a texel when they face its way and, where geometry
+    // crosses either footprint, see it (not the eave's light for the attic behind the wall).
+    auto same_surface = [&](size_t i, size_t j) {
+        const LightmapTexel &a = map.texels[i], &b = map.texels[j];
+        return glm::dot(a.normal, b.normal) > 0.9f &&
+               (!(m.straddles[i] || m.straddles[j]) ||
+                sees(rays, lifted_centre(map, i), lifted_centre(map, j)));
+    };
+    // Every stride-th texel in x and y; the others take the mean of those around them on
+    // their own surface, or run themselves where none is (a chart's thin strip).
+    tbb::parallel_for(size_t(0), n, [&](size_t i) {
+        if (valid(i) && int(i % size_t(w)) % stride == 0 && int(i / size_t(w)) % stride == 0)
+            run(i);
+    });
+    std::vector<std::vector<size_t>> sources(n);
+    std::vector<char> runs_itself(n, 0);
+    tbb::parallel_for(size_t(0), n, [&](size_t i) {
+        if (!valid(i) || done[i]) return;
+        const int x0 = int(i % size_t(w)), y0 = int(i / size_t(w));
+        for (int y = std::max(0, y0 - stride + 1); y <= std::min(map.height - 1, y0 + stride - 1);
+             ++y)
+            for (int x = std::max(0, x0 - stride + 1); x <= std::min(w - 1, x0 + stride - 1); ++x) {
+                const size_t j = size_t(y) * size_t(w) + size_t(x);
+                if (done[j] && same_surface(i, j)) sources[i].push_back(j);
+            }
+        // Sources on both sides of a light's shadow: the texel's own side is unknown, so it
+        // runs itself (the texels along shadow edges).
+        const bool mixed = std::any_of(sources[i].begin(), sources[i].end(), [&](size_t j) {
+            return m.guide.shadows[j] != m.guide.shadows[sources[i].front()] ||
+                   m.gated[j] != m.gated[sources[i].front()];
+        });
+        if (mixed) sources[i].clear();
+        runs_itself[i] = sources[i].empty();
+    });
+    std::vector<size_t> missing;
+    for (size_t i = 0; i < n; ++i)
+        if (runs_itself[i]) missing.push_back(i);
+    tbb::parallel_for(size_t(0), missing.size(), [&](size_t k) { run(missing[k]); });
+    filter_computed(map, done, m.guide, same_surface, m.deferred, m.unoccluded);
+    for (size_t i = 0; i < n; ++i) {
+        if (sources[i].empty()) continue;
+        // The sources, all shadowed alike: the texel's value and shadows.
+        m.deferred[i] = mean_of_texels(m.deferred, sources[i]);
+        for (size_t j : sources[i]) m.unoccluded[i] += m.unoccluded[j];
+        m.guide.shadows[i] = m.guide.shadows[sources[i].front()];
+        m.gated[i] = m.gated[sources[i].front()];
+    }
+    return m;
+}
+
+long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& m, int paths,
+                                     PackedMap& packed) {
+    const size_t n = map.texels.size();
+    // Per texel: the emitters' RGB, the surface light's RGB, the corrections' ratio to the
+    // tables' single scattering of the unoccluded connections, then (not stored) the lifted
+    // centre, the lift and whether geometry crosses the footprint, dilated alike.
+    constexpr size_t kChannels = 14, kCentre = 9, kLift = 12, kStraddles = 13;
+    std::vector<float> v(n * kChannels, 0.0f);
+    for (size_t i = 0; i < n; ++i) {
+        if (map.texels[i].state != TexelState::Valid) continue;
+        const vec3 centre = lifted_centre(map, i);
+        for (int c = 0; c < 3; ++c) v[i * kChannels + kCentre + size_t(c)] = centre[c];
+        v[i * kChannels + kLift] = straddle_lift(map, i);
+        v[i * kChannels + kStraddles] = m.straddles[i] ? 1.0f : 0.0f;
+        const vec3 emitters = (m.deferred[i].single + m.deferred[i].multiple) / float(paths);
+        const vec3 surface = m.deferred[i].surface / float(paths);
+        vec3 ratio(0.0f);
+        for (int c = 0; c < 3; ++c)
+            if (m.unoccluded[i].tables[c] > 0.0f)
+                ratio[c] = m.unoccluded[i].correction[c] / m.unoccluded[i].tables[c];
+        if (!std::isfinite(emitters.x + emitters.y + emitters.z + surface.x + surface.y +
+                           surface.z + ratio.x + ratio.y + ratio.z))
+            continue;
+        for (int c = 0; c < 3; ++c) {
+            v[i * kChannels + size_t(c)] = emitters[c];
+            v[i * kChannels + 3 + size_t(c)] = surface[c];
+            v[i * kChannels + 6 + size_t(c)] = ratio[c];
+        }
+    }
+    // Lookups near a chart's edge may land on the ring outside it.
+    const std::vector<TexelState> states = dilate(map, v, int(kChannels), 2);
+    packed.width = map.width;
+    packed.height = map.height;
+    for (size_t i = 0; i < n; ++i) {
+        for (size_t c = 0; c < 6; ++c)
+            packed.scale = std::max(packed.scale, std::abs(v[i * kChannels + c]));
+        for (size_t c = 6; c < 9; ++c)
+            packed.ratio_scale = std::max(packed.ratio_scale, std::abs(v[i * kChannels + c]));
+    }
+    const float inv = packed.scale > 0.0f ? 1.0f / packed.scale : 0.0f;
+    const float inv_ratio = packed.ratio_scale > 0.0f ? 1.0f / packed.ratio_scale : 0.0f;
+    packed.halves.resize(n * kHalvesPerTexel);
+    packed.straddles.assign((n + 63) / 64, {});
+    long straddling = 0;
+    for (size_t i = 0; i < n; ++i) {
+        uint16_t* h = &packed.halves[i * kHalvesPerTexel];
+        for (size_t c = 0; c < 9; ++c)
+            h[c] = glm::packHalf1x16(v[i * kChannels + c] * (c < 6 ? inv : inv_ratio));
+        // The shadows of the texel's point and directional lights, where known (valid texels
+        // under exact tracking; dilated ones hold for any hit).
+        const bool gate = states[i] == TexelState::Valid && m.gated[i];
+        for (int w16 = 0; w16 < 4; ++w16)
+            h[9 + w16] = gate ? uint16_t(m.guide.shadows[i] >> (16 * w16)) : 0;
+        h[13] = gate ? 1 : 0;
+        const bool filled = states[i] == TexelState::Valid || states[i] == TexelState::Dilated;
+        if (filled && v[i * kChannels + kStraddles] > 0.0f) {
+            const float* e = &v[i * kChannels + kCentre];
+            packed.straddles[i / 64].bits |= uint64_t(1) << (i % 64);
+            const bool mixed = states[i] == TexelState::Valid && m.cover[i].mixed;
+            packed.centres.push_back(
+                {uint32_t(i), vec3(e[0], e[1], e[2]), e[3], mixed, mixed && m.cover[i].centre});
+            straddling += states[i] == TexelState::Valid;
+        }
+    }
+    uint32_t before = 0;
+    for (PackedMap::StraddleWord& w : packed.straddles) {
+        w.before = before;
+        before += uint32_t(__builtin_popcountll(w.bits));
+    }
+    return straddling;
+}
+
 VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& media,
                                              const ImpulseTables* tables,
                                              const BakeSettings& settings,
@@ -156,155 +328,10 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
         triangles_[mi].resize(map.triangle_uv.size() / 3);
         tbb::parallel_for(size_t(0), triangles_[mi].size(),
                           [&](size_t t) { triangles_[mi][t] = triangle_to_texels(rays, map, t); });
-        const size_t n = map.texels.size();
-        std::vector<IrradianceParts> deferred(n);
-        std::vector<UnoccludedSingle> unoccluded(n);
-        std::vector<char> done(n, 0), gated(n, 0);
-        TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
-        auto run = [&](size_t i) {
-            const LightmapTexel& t = map.texels[i];
-            BakeCounters counters;
-            BakeEstimator::FixedDirect fixed;
-            IrradianceParts sum;
-            // Keyed apart from the bake's lightmaps and probes (maps.size()).
-            for (int s = 0; s < paths_; ++s) {
-                CounterRng rng = texel_random(settings.seed, maps.size() + 1 + mi, i, s);
-                sum += estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
-                                          &deferred[i], -1.0f, &unoccluded[i]);
-            }
-            set_texel_filter_guide(guide, i, fixed, sum);
-            gated[i] = fixed.known;  // its lights' shadows known (exact tracking)
-            done[i] = 1;
-            rays_cast += counters.rays;
-            ++computed;
-        };
-        const int w = map.width, stride = kFieldStride;
-        auto valid = [&](size_t i) { return map.texels[i].state == TexelState::Valid; };
-        std::vector<char> straddles(n, 0);
-        std::vector<Cover> cover(n);
-        tbb::parallel_for(size_t(0), n, [&](size_t i) {
-            if (!valid(i)) return;
-            cover[i] = cover_of(rays, map, i);
-            straddles[i] = cover[i].mixed || straddles_geometry(rays, map, i);
-        });
-        // Neighbours in the atlas stand for a texel when they face its way and, where geometry
-        // crosses either footprint, see it (not the eave's light for the attic behind the wall).
-        auto lifted = [&](size_t i) {
-            return map.texels[i].position + map.texels[i].normal * straddle_lift(map, i);
-        };
-        auto same_surface = [&](size_t i, size_t j) {
-            const LightmapTexel &a = map.texels[i], &b = map.texels[j];
-            return glm::dot(a.normal, b.normal) > 0.9f &&
-                   (!(straddles[i] || straddles[j]) || sees(rays, lifted(i), lifted(j)));
-        };
-        // Every stride-th texel in x and y; the others take the mean of those around them on
-        // their own surface, or run themselves where none is (a chart's thin strip).
-        tbb::parallel_for(size_t(0), n, [&](size_t i) {
-            if (valid(i) && int(i % size_t(w)) % stride == 0 && int(i / size_t(w)) % stride == 0)
-                run(i);
-        });
-        std::vector<std::vector<size_t>> sources(n);
-        std::vector<char> runs_itself(n, 0);
-        tbb::parallel_for(size_t(0), n, [&](size_t i) {
-            if (!valid(i) || done[i]) return;
-            const int x0 = int(i % size_t(w)), y0 = int(i / size_t(w));
-            for (int y = std::max(0, y0 - stride + 1);
-                 y <= std::min(map.height - 1, y0 + stride - 1); ++y)
-                for (int x = std::max(0, x0 - stride + 1); x <= std::min(w - 1, x0 + stride - 1);
-                     ++x) {
-                    const size_t j = size_t(y) * size_t(w) + size_t(x);
-                    if (done[j] && same_surface(i, j)) sources[i].push_back(j);
-                }
-            // Sources on both sides of a light's shadow: the texel's own side is unknown, so
-            // it runs itself (the texels along shadow edges).
-            const bool mixed = std::any_of(sources[i].begin(), sources[i].end(), [&](size_t j) {
-                return guide.shadows[j] != guide.shadows[sources[i].front()] ||
-                       gated[j] != gated[sources[i].front()];
-            });
-            if (mixed) sources[i].clear();
-            runs_itself[i] = sources[i].empty();
-        });
-        std::vector<size_t> missing;
-        for (size_t i = 0; i < n; ++i)
-            if (runs_itself[i]) missing.push_back(i);
-        tbb::parallel_for(size_t(0), missing.size(), [&](size_t k) { run(missing[k]); });
-        filter_computed(map, done, guide, same_surface, deferred, unoccluded);
-        for (size_t i = 0; i < n; ++i) {
-            if (sources[i].empty()) continue;
-            // The sources, all shadowed alike: the texel's value and shadows.
-            deferred[i] = mean_of_texels(deferred, sources[i]);
-            for (size_t j : sources[i]) unoccluded[i] += unoccluded[j];
-            guide.shadows[i] = guide.shadows[sources[i].front()];
-            gated[i] = gated[sources[i].front()];
-        }
-        // Per texel: the emitters' RGB, the surface light's RGB, the corrections' ratio to the
-        // tables' single scattering of the unoccluded connections, then (not stored) the lifted
-        // centre, the lift and whether geometry crosses the footprint, dilated alike.
-        constexpr size_t kChannels = 14, kCentre = 9, kLift = 12, kStraddles = 13;
-        std::vector<float> v(n * kChannels, 0.0f);
-        for (size_t i = 0; i < n; ++i) {
-            if (valid(i)) {
-                const vec3 centre = lifted(i);
-                for (int c = 0; c < 3; ++c) v[i * kChannels + kCentre + size_t(c)] = centre[c];
-                v[i * kChannels + kLift] = straddle_lift(map, i);
-                v[i * kChannels + kStraddles] = straddles[i] ? 1.0f : 0.0f;
-            }
-            const vec3 emitters = (deferred[i].single + deferred[i].multiple) / float(paths_);
-            const vec3 surface = deferred[i].surface / float(paths_);
-            vec3 ratio(0.0f);
-            for (int c = 0; c < 3; ++c)
-                if (unoccluded[i].tables[c] > 0.0f)
-                    ratio[c] = unoccluded[i].correction[c] / unoccluded[i].tables[c];
-            if (map.texels[i].state != TexelState::Valid ||
-                !std::isfinite(emitters.x + emitters.y + emitters.z + surface.x + surface.y +
-                               surface.z + ratio.x + ratio.y + ratio.z))
-                continue;
-            for (int c = 0; c < 3; ++c) {
-                v[i * kChannels + size_t(c)] = emitters[c];
-                v[i * kChannels + 3 + size_t(c)] = surface[c];
-                v[i * kChannels + 6 + size_t(c)] = ratio[c];
-            }
-        }
-        // Lookups near a chart's edge may land on the ring outside it.
-        const std::vector<TexelState> states = dilate(map, v, int(kChannels), 2);
-        PackedMap& packed = packed_[mi];
-        packed.width = map.width;
-        packed.height = map.height;
-        for (size_t i = 0; i < n; ++i) {
-            for (size_t c = 0; c < 6; ++c)
-                packed.scale = std::max(packed.scale, std::abs(v[i * kChannels + c]));
-            for (size_t c = 6; c < 9; ++c)
-                packed.ratio_scale = std::max(packed.ratio_scale, std::abs(v[i * kChannels + c]));
-        }
-        const float inv = packed.scale > 0.0f ? 1.0f / packed.scale : 0.0f;
-        const float inv_ratio = packed.ratio_scale > 0.0f ? 1.0f / packed.ratio_scale : 0.0f;
-        packed.halves.resize(n * kHalvesPerTexel);
-        packed.straddles.assign((n + 63) / 64, {});
-        for (size_t i = 0; i < n; ++i) {
-            uint16_t* h = &packed.halves[i * kHalvesPerTexel];
-            for (size_t c = 0; c < 9; ++c)
-                h[c] = glm::packHalf1x16(v[i * kChannels + c] * (c < 6 ? inv : inv_ratio));
-            // The shadows of the texel's point and directional lights, where known (valid
-            // texels under exact tracking; dilated ones hold for any hit).
-            const bool gate = states[i] == TexelState::Valid && gated[i];
-            for (int w16 = 0; w16 < 4; ++w16)
-                h[9 + w16] = gate ? uint16_t(guide.shadows[i] >> (16 * w16)) : 0;
-            h[13] = gate ? 1 : 0;
-            const bool filled = states[i] == TexelState::Valid || states[i] == TexelState::Dilated;
-            if (filled && v[i * kChannels + kStraddles] > 0.0f) {
-                const float* e = &v[i * kChannels + kCentre];
-                packed.straddles[i / 64].bits |= uint64_t(1) << (i % 64);
-                const bool mixed = states[i] == TexelState::Valid && cover[i].mixed;
-                packed.centres.push_back(
-                    {uint32_t(i), vec3(e[0], e[1], e[2]), e[3], mixed, mixed && cover[i].centre});
-                straddling += states[i] == TexelState::Valid;
-            }
-        }
-        uint32_t before = 0;
-        for (PackedMap::StraddleWord& w : packed.straddles) {
-            w.before = before;
-            before += uint32_t(__builtin_popcountll(w.bits));
-        }
+        // Keyed apart from the bake's lightmaps and probes (maps.size()).
+        const MapTerms terms = estimate_map(rays, estimator, map, maps.size() + 1 + mi,
+                                            settings.seed, rays_cast, computed);
+        straddling += pack_map(map, terms, paths_, packed_[mi]);
     }
     rays_ = rays_cast;
     computed_ = computed;

@@ -53,6 +53,7 @@
 // |                     | read light of up to depth - 1 more bounces than bake.bounces)    |
 #pragma once
 
+#include <atomic>
 #include <vector>
 
 #include "accel/ray_scene.h"
@@ -60,6 +61,7 @@
 
 namespace freqlab {
 
+class BakeEstimator;
 class ImpulseTables;
 class Media;
 struct BakeSettings;
@@ -154,6 +156,14 @@ class VertexCorrectionField {
         std::vector<StraddlingTexel> centres;
     };
     std::vector<PackedMap> packed_;
+    // The prepass of one map (its texels' terms) and their packing (returns the valid
+    // straddling texels).
+    struct MapTerms;
+    MapTerms estimate_map(const RayScene& rays, const BakeEstimator& estimator,
+                          const ObjectLightmap& map, uint64_t key, int seed,
+                          std::atomic<long>& rays_cast, std::atomic<long>& computed) const;
+    static long pack_map(const ObjectLightmap& map, const MapTerms& terms, int paths,
+                         PackedMap& packed);
     int paths_ = 0;
     long rays_ = 0;
     long computed_ = 0;
