@@ -106,11 +106,21 @@ static_assert(kL == 11, "polynomial11 evaluates 11 terms");
 
 }  // namespace
 
-template <int Channels, bool Shifted>
+template <int Channels, bool Shifted, int Only>
 void ImpulseIrradiance::Grid::lookup(const At& d, double shift, double cos, double out[2]) const {
     out[0] = out[1] = 0.0;
     if (!d.valid) return;
     constexpr size_t row = size_t(Channels) * kL;
+    if constexpr (Only >= 0) {
+        // One channel of a two-channel row (an area emitter's multiple scattering, the point
+        // emitter's): half the blend and one polynomial.
+        static_assert(!Shifted && Only < Channels, "one channel of an unshifted grid");
+        const float* r0 = &values[size_t(d.i) * row + size_t(Only) * kL];
+        float coef[kL];
+        for (int k = 0; k < kL; ++k) coef[k] = r0[k] + d.fu * (r0[row + size_t(k)] - r0[k]);
+        out[Only] = polynomial11(coef, std::clamp(cos, -1.0, 1.0));
+        return;
+    }
     const float fu = d.fu;
     size_t first = size_t(d.i);
     float fs = 0.0f;
@@ -232,7 +242,7 @@ ScatteredIrradiance ImpulseIrradiance::area(const At& d, double shift, double co
     // impulse_query.h), about the light axis.
     double single[2], point[2];
     area_single_.lookup<1, true>(d, shift, cos_single, single);
-    point_.lookup<2, false>(d, 0.0, cos_light, point);
+    point_.lookup<2, false, 1>(d, 0.0, cos_light, point);
     return {single[0] * d.trend_point, 0.25 * point[1] * d.trend_point};
 }
 

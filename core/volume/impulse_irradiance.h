@@ -81,8 +81,9 @@ class ImpulseIrradiance {
                             size_t(channel)) *
                            kTerms];
         }
-        // E / trend of channel 0 and, with two channels, 1 (Shifted: area, 8 shift bins).
-        template <int Channels, bool Shifted>
+        // E / trend of channel 0 and, with two channels, 1 (Shifted: area, 8 shift bins);
+        // Only >= 0: that channel alone (the other left 0).
+        template <int Channels, bool Shifted, int Only = -1>
         void lookup(const At& d, double shift, double cos, double out[2]) const;
     };
     Grid point_, directional_;  // channels: single, multiple
