@@ -6,6 +6,10 @@
 //   BENCH_BAKE_SCENE=scenes/smoke_room.json ./build/tests/freqlab_benchmarks
 //   --benchmark_filter=BakePath
 //   BENCH_BAKE_SET="texel_mc_rate=0 single_correction=false" (bake settings by key, as --set)
+// These machines are noisy (the same binary's medians move 10-25 % within minutes): compare
+// methods within one run, randomly interleaved, and read the medians' ns_per_path:
+//   --benchmark_repetitions=12 --benchmark_enable_random_interleaving=true
+//   --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
