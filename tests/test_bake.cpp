@@ -685,6 +685,15 @@ TEST(Bake, VertexCorrectionFieldDoesNotLeakThroughWallsCrossingItsTexels) {
     // ... outside it is; and inside, texels the walls do not cross are read.
     EXPECT_TRUE(field->locate(hit(1.8f, 0.3f)).found());
     EXPECT_TRUE(field->locate(hit(0.5f, 0.4f)).found());
+    // The lookups' visibility rays are counted (the bake's stats.rays): one or two on a texel
+    // the walls cross, none on one they do not.
+    long rays = 0;
+    field->locate(hit(1.05f, 0.3f), &rays);
+    EXPECT_GE(rays, 1);
+    EXPECT_LE(rays, 2);
+    rays = 0;
+    EXPECT_TRUE(field->locate(hit(0.5f, 0.4f), &rays).found());
+    EXPECT_EQ(rays, 0);
 }
 
 // A lid 0.02 above a floor lit by a lamp beside it, ending inside a floor texel whose centre

@@ -626,7 +626,7 @@ IrradianceParts BakeEstimator::vertex_irradiance(const SurfaceHit& hit, const ve
                                                  IrradianceParts* deferred) const {
     VertexCorrectionField::Texel field;
     if (corrections_ && scatters_ && depth > settings_.lit_medium_depth)
-        field = corrections_->locate(hit);
+        field = corrections_->locate(hit, &counters.rays);
     UnoccludedSingle single;
     IrradianceParts parts =
         surface_path(hit.position, hit.shading_normal, albedo, depth, rng, counters, nullptr,

@@ -338,7 +338,8 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
     straddling_ = straddling;
 }
 
-VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit) const {
+VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit,
+                                                           long* rays) const {
     Texel texel;
     if (!maps_ || hit.object < 0 || size_t(hit.object) >= map_of_object_.size()) return texel;
     int mi = map_of_object_[size_t(hit.object)];
@@ -354,19 +355,24 @@ VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit
     const int x = std::clamp(int(uv.x), 0, map.width - 1);
     const int y = std::clamp(int(uv.y), 0, map.height - 1);
     const size_t k = size_t(y) * size_t(map.width) + size_t(x);
-    // Geometry crosses this texel: its value holds for the side its centre is on (one ray, on
-    // the few hits that land on such texels).
+    // Geometry crosses this texel: its value holds for the side its centre is on (one ray, two
+    // where a cover close above is checked; valley at low quality: 10.3 M of 12.8 M lookups).
     const PackedMap::StraddleWord& word = map.straddles[k / 64];
     if (word.bits >> (k % 64) & 1) {
         const uint64_t below = word.bits & ((uint64_t(1) << (k % 64)) - 1);
         const StraddlingTexel* it = &map.centres[word.before + size_t(__builtin_popcountll(below))];
-        if ((!sees(
-                 *scene_,
+        long cast = 1;
+        bool read =
+            sees(*scene_,
                  spawn_point(hit.position + hit.geometric_normal * it->lift, hit.geometric_normal),
-                 it->lifted_centre) ||
-             (it->check_cover && covered(*scene_, hit.position, hit.geometric_normal,
-                                         it->lift * (kCoverReach / kStraddleLift)) != it->covered)))
-            return texel;
+                 it->lifted_centre);
+        if (read && it->check_cover) {
+            ++cast;
+            read = covered(*scene_, hit.position, hit.geometric_normal,
+                           it->lift * (kCoverReach / kStraddleLift)) == it->covered;
+        }
+        if (rays) *rays += cast;
+        if (!read) return texel;
     }
     texel.halves_ = map.halves.data() + k * kHalvesPerTexel;
     texel.scale_ = map.scale;

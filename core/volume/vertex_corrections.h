@@ -99,7 +99,8 @@ class VertexCorrectionField {
         float scale_ = 0.0f, ratio_scale_ = 0.0f;
         bool surface_light_ = false;
     };
-    Texel locate(const SurfaceHit& hit) const;
+    // `rays`: where given, counts the visibility rays the lookup casts (a straddling texel's).
+    Texel locate(const SurfaceHit& hit, long* rays = nullptr) const;
     // The field's value at texel `texel` of lightmap `map` (the trace prints it).
     Texel at_texel(size_t map, size_t texel) const;
     // Whether the field holds surface light (texel_surface_light = walk, bounces >= 2).
