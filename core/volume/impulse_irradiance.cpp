@@ -108,19 +108,14 @@ static_assert(kL == 11, "polynomial11 evaluates 11 terms");
 
 template <int Channels, bool Shifted, int Only>
 void ImpulseIrradiance::Grid::lookup(const At& d, double shift, double cos, double out[2]) const {
+    static_assert(Only < Channels, "a channel of the grid");
     out[0] = out[1] = 0.0;
     if (!d.valid) return;
     constexpr size_t row = size_t(Channels) * kL;
-    if constexpr (Only >= 0) {
-        // One channel of a two-channel row (an area emitter's multiple scattering, the point
-        // emitter's): half the blend and one polynomial.
-        static_assert(!Shifted && Only < Channels, "one channel of an unshifted grid");
-        const float* r0 = &values[size_t(d.i) * row + size_t(Only) * kL];
-        float coef[kL];
-        for (int k = 0; k < kL; ++k) coef[k] = r0[k] + d.fu * (r0[row + size_t(k)] - r0[k]);
-        out[Only] = polynomial11(coef, std::clamp(cos, -1.0, 1.0));
-        return;
-    }
+    // The channels evaluated: all, or Only's alone (an area emitter's multiple scattering, the
+    // point emitter's: half the blend and one polynomial).
+    constexpr int c_first = Only >= 0 ? Only : 0, c_last = Only >= 0 ? Only + 1 : Channels;
+    constexpr size_t k_first = size_t(c_first) * kL, k_last = size_t(c_last) * kL;
     const float fu = d.fu;
     size_t first = size_t(d.i);
     float fs = 0.0f;
@@ -133,16 +128,16 @@ void ImpulseIrradiance::Grid::lookup(const At& d, double shift, double cos, doub
     // Blend the coefficient rows (a straight loop over row floats: vectorized).
     const float* r0 = &values[first * row];
     float coef[row];
-    for (size_t k = 0; k < row; ++k) coef[k] = r0[k] + fu * (r0[row + k] - r0[k]);
+    for (size_t k = k_first; k < k_last; ++k) coef[k] = r0[k] + fu * (r0[row + k] - r0[k]);
     if constexpr (Shifted) {
         const float* r2 = r0 + size_t(kD) * row;  // the next shift bin
-        for (size_t k = 0; k < row; ++k) {
+        for (size_t k = k_first; k < k_last; ++k) {
             const float next = r2[k] + fu * (r2[row + k] - r2[k]);
             coef[k] += fs * (next - coef[k]);
         }
     }
     const double x = std::clamp(cos, -1.0, 1.0);
-    for (int c = 0; c < Channels; ++c) out[c] = polynomial11(coef + size_t(c) * kL, x);
+    for (int c = c_first; c < c_last; ++c) out[c] = polynomial11(coef + size_t(c) * kL, x);
 }
 
 ImpulseIrradiance::ImpulseIrradiance(const ImpulseTables& tables, double g, double albedo,
