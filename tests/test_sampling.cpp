@@ -132,11 +132,14 @@ std::shared_ptr<const RgbImage> test_map() {
 
 }  // namespace
 
-static void check_environment_samples(bool inverted) {
-    const EnvironmentMap env("test", test_map(), 37.0f, 1.0f);
+// Counts of `env`'s samples in bins of `bin` x `bin` texels against the bins' probabilities.
+// `max_mismatches`: the samples whose direction maps back to a neighbouring texel, by float
+// rounding at its edges (more edges, more of them: see the sky test below).
+static void check_environment_samples(const EnvironmentMap& env, bool inverted, int bin = 1,
+                                      int max_mismatches = 10) {
     const int n = 1000000;
-    const int w = env.distribution().width(), h = env.distribution().height();
-    std::vector<double> observed(size_t(w) * h, 0.0), expected(observed.size());
+    const int w = env.distribution().width() / bin, h = env.distribution().height() / bin;
+    std::vector<double> observed(size_t(w) * h, 0.0), expected(observed.size(), 0.0);
     CounterRng rng(3, 0, 0, 0);
     // The density jumps at texel edges, so a sample within float rounding of an edge may
     // round-trip into the neighbour texel: allow a handful of such mismatches, no more.
@@ -165,10 +168,11 @@ static void check_environment_samples(bool inverted) {
         const int x = std::clamp(int(uv.x * w), 0, w - 1), y = std::clamp(int(uv.y * h), 0, h - 1);
         observed[size_t(y) * w + x] += 1;
     }
-    EXPECT_LE(mismatches, 10) << "sampled pdf disagrees with pdf(direction)";
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x)
-            expected[size_t(y) * w + x] = n * env.distribution().texel_probability(x, y);
+    EXPECT_LE(mismatches, max_mismatches) << "sampled pdf disagrees with pdf(direction)";
+    for (int y = 0; y < h * bin; ++y)
+        for (int x = 0; x < w * bin; ++x)
+            expected[size_t(y / bin) * w + size_t(x / bin)] +=
+                n * env.distribution().texel_probability(x, y);
     double chi2;
     EXPECT_GT(test::chi_square_p_value(observed, expected, &chi2), 1e-3) << "chi2 = " << chi2;
 }
@@ -176,10 +180,59 @@ static void check_environment_samples(bool inverted) {
 // Both ways of drawing a texel: the alias table (independent samples) and the CDF inversion
 // (stratified samples; here fed independent uniforms, so chi-square applies).
 TEST(Sampling, EnvironmentSamplesFollowTexelProbabilities) {
+    const EnvironmentMap env("test", test_map(), 37.0f, 1.0f);
+    ASSERT_EQ(env.distribution().tile(), 1);  // 512 texels: below kMinTiledTexels
     for (bool inverted : {false, true}) {
         SCOPED_TRACE(inverted ? "CDF inversion" : "alias table");
-        check_environment_samples(inverted);
+        check_environment_samples(env, inverted);
     }
+}
+
+// A sky without a sun disc is smooth: its density is constant over tiles (a table that stays
+// in cache) at a second-moment cost under 1 %; the samples still follow it, by alias table and
+// by inversion, in bins of 2 x 2 texels (each a quarter of a tile or less, so a sample placed
+// in the wrong texel of its tile fails the test). A sun disc keeps the per-texel density.
+TEST(Sampling, SmoothSkiesAreSampledByTilesThatCostUnderOnePercent) {
+    ProceduralSky sky;
+    sky.sun_radiance = vec3(0.0f);
+    const auto image = sky.bake(512, 256);
+    const EnvironmentMap env("sky", image, 37.0f, 1.0f);
+    const Distribution2D& d = env.distribution();
+    ASSERT_GT(d.tile(), 2);
+    EXPECT_LE(d.inflation(), Distribution2D::kMaxTileInflation);
+    EXPECT_GE(d.inflation(), 1.0);
+    // Each texel's density is its tile's mean.
+    std::vector<float> weights(size_t(512) * 256);
+    for (int y = 0; y < 256; ++y)
+        for (int x = 0; x < 512; ++x)
+            weights[size_t(y) * 512 + x] =
+                luminance(image->at(x, y)) * std::sin(float(M_PI) * (y + 0.5f) / 256.0f);
+    double sum = 0.0;
+    for (float w : weights) sum += w;
+    const int f = d.tile();
+    for (int ty : {0, 3, 7}) {
+        double tile_sum = 0.0;
+        for (int y = ty * f; y < (ty + 1) * f; ++y)
+            for (int x = 5 * f; x < 6 * f; ++x) tile_sum += weights[size_t(y) * 512 + x];
+        EXPECT_NEAR(d.texel_probability(5 * f + 1, ty * f + f - 1), tile_sum / sum / double(f * f),
+                    1e-6 * tile_sum / sum);
+    }
+    // The sampled directions fall in their texels as that density says. 512 x 256 texels
+    // have 16x the 32 x 16 map's edges per unit of (u, v): of 1 M samples ~30 map back to a
+    // neighbouring texel whether sampled per texel or by tiles (measured: 31 and 32), up to 11
+    // of them across a row (this sky's radiance changes only from row to row).
+    for (bool inverted : {false, true}) {
+        SCOPED_TRACE(inverted ? "CDF inversion" : "alias table");
+        check_environment_samples(env, inverted, 2, 30);
+    }
+    // Weights constant over tiles cost nothing; a one-texel sun in a tile costs ~ the tile.
+    std::vector<float> flat(size_t(64) * 32, 1.0f);
+    EXPECT_DOUBLE_EQ(Distribution2D::tile_inflation(flat, 64, 32, 8), 1.0);
+    flat[size_t(9) * 64 + 9] = 1e6f;
+    EXPECT_GT(Distribution2D::tile_inflation(flat, 64, 32, 8), 50.0);
+    ProceduralSky sunny;  // the default sun
+    ASSERT_GT(luminance(sunny.sun_radiance), 0.0f);
+    EXPECT_EQ(EnvironmentMap("sun", sunny.bake(512, 256), 0.0f, 1.0f).distribution().tile(), 1);
 }
 
 TEST(Sampling, EnvironmentPdfIntegratesToOneAndCoversTheRadiance) {

@@ -1,5 +1,19 @@
 // A piecewise-constant 2D distribution, used for environment-map importance sampling. Built
 // once per map; sampling is O(1) by alias table, or O(log) by inverting the CDFs.
+//
+// A smooth map is sampled by tiles: the density is constant over square tiles of f x f texels
+// (f = tile(), a power of two) when that costs the sampling almost nothing. Why: a 2048 x 1024
+// sky's alias table (16 MB) and CDFs miss the cache on every draw, and its sampling was 8-11 %
+// of valley's bakes (perf, session 31); a 256 x 128 table stays in L2. What it costs: against
+// the per-texel density, the second moment of an estimate of the weights' own integral grows
+// by inflation() = sum_i w_i^2 / wbar_tile(i) / sum_i w_i (>= 1, 1 for weights constant over
+// each tile); the coarsest f with inflation <= kMaxTileInflation is taken.
+//
+// | parameter          | meaning                                                            |
+// |--------------------|--------------------------------------------------------------------|
+// | kMaxTileInflation  | 1.01: at most 1 % more second moment on the weights themselves     |
+// | kMinTiledTexels    | 65536: smaller maps stay per texel (their tables are cached anyway)|
+// | kMaxTile           | 16 texels a side                                                   |
 #pragma once
 
 #include <algorithm>
@@ -17,18 +31,32 @@ namespace freqlab {
 // searches were 18 % of the MIS integrator's time on rotor.json).
 class Distribution2D {
   public:
-    Distribution2D() = default;
-    Distribution2D(const std::vector<float>& weights, int width, int height);
+    static constexpr double kMaxTileInflation = 1.01;
+    static constexpr size_t kMinTiledTexels = 65536;
+    static constexpr int kMaxTile = 16;
 
-    // u.x picks the texel, u.y is the alias coin, (u.z, u.w) the position inside the texel.
+    Distribution2D() = default;
+    // tile: 0 chooses it (above); 1 keeps a density per texel; else a power of two dividing
+    // width and height.
+    Distribution2D(const std::vector<float>& weights, int width, int height, int tile = 0);
+    // The second-moment growth of sampling `weights` by tiles of `tile` texels a side (above).
+    static double tile_inflation(const std::vector<float>& weights, int width, int height,
+                                 int tile);
+
+    // u.x picks the tile, u.y is the alias coin, (u.z, u.w) the position inside the tile
+    // (a texel when tile() is 1).
     vec2 sample(const vec4& u, float* pdf) const;
     // The texel index sample() picks (one alias-table read), and where in it sample() lands.
     int sample_texel(const vec4& u) const;
     vec2 texel_point(int texel, const vec4& u) const;
+    // Texels a side of the tiles the density is constant over, and its cost (above).
+    int tile() const { return 1 << tile_shift_; }
+    int tile_shift() const { return tile_shift_; }
+    double inflation() const { return inflation_; }
     // Continuous inversion of the rows' marginal CDF (u.y) and the row's conditional CDF
-    // (u.x): nearby u land nearby, so stratified u stay stratified over the map (the alias
-    // table scatters them). Same density as sample_texel(); `within` is the position inside
-    // the texel, what texel_point() takes as (u.z, u.w).
+    // (u.x), over tiles: nearby u land nearby, so stratified u stay stratified over the map
+    // (the alias table scatters them). Same density as sample_texel(); `within` is the
+    // position inside the tile, what texel_point() takes as (u.z, u.w).
     int sample_texel_inverted(vec2 u, vec2* within) const;
     // The same in three stages, for loops over many samples: each stage prefetches what the
     // next reads, so the cache misses of all samples overlap (the column tables are megabytes).
@@ -54,12 +82,16 @@ class Distribution2D {
     size_t alias_slot(const vec4& u) const {
         return std::min(size_t(u.x * float(alias_.size())), alias_.size() - 1);
     }
+    // The texel of tile (tile_x, tile_y) at position `within` inside it.
+    int texel_in_tile(int tile_x, int tile_y, vec2 within) const;
     int width_ = 0, height_ = 0;
+    int tile_shift_ = 0, tiles_x_ = 0, tiles_y_ = 0;  // the tables below are over tiles
+    double inflation_ = 1.0;
     struct AliasEntry {
         float keep;      // probability of keeping texel i
         uint32_t alias;  // the texel taken otherwise
     };
-    std::vector<float> pdf_;            // density over [0,1)^2 of each texel
+    std::vector<float> pdf_;            // density over [0,1)^2 of each texel (its tile's)
     HugePageVector<AliasEntry> alias_;  // packed: one cache line per draw, not two
     // Double precision so that a dim texel keeps its own mass (a float sum of a 2048-texel row
     // rounds masses below ~1e-7 of the row away).

@@ -171,13 +171,15 @@ void EnvironmentMap::sample_directions(int n, const int* texel, const vec4* u, f
                                        float* z, float* sin_theta) const {
     const int w = image_->width, h = image_->height;
     const double inv_w = 1.0 / w;
-    const float inv_wf = 1.0f / float(w), inv_hf = 1.0f / float(h);
+    // (u.z, u.w) place the sample in the texel's sampling tile (Distribution2D::tile()).
+    const int shift = distribution_.tile_shift();
+    const float inv_wf = 1.0f / float(w >> shift), inv_hf = 1.0f / float(h >> shift);
     const float rotation = glm::radians(rotation_deg_);
     for (int i = 0; i < n; ++i) {
         // Row and column in double: exact for any map, and vectorizable (an int division is not).
         const int row = int((double(texel[i]) + 0.5) * inv_w), column = texel[i] - row * w;
-        const float uv_x = std::min((float(column) + u[i].z) * inv_wf, 0x1.fffffep-1f);
-        const float uv_y = std::min((float(row) + u[i].w) * inv_hf, 0x1.fffffep-1f);
+        const float uv_x = std::min((float(column >> shift) + u[i].z) * inv_wf, 0x1.fffffep-1f);
+        const float uv_y = std::min((float(row >> shift) + u[i].w) * inv_hf, 0x1.fffffep-1f);
         float st, ct, sp, cp;
         fast_sincos(kPi * uv_y, &st, &ct);
         fast_sincos(kTwoPi * uv_x + rotation, &sp, &cp);

@@ -18,13 +18,14 @@ namespace freqlab {
 // A lat-long map with importance sampling.
 //
 // The lighting function every integrator sees is the map as a piecewise-constant function
-// over texels (eval): the sampling density is then exactly luminance x sin(theta) per texel,
-// an environment sample's radiance is one texel read (no trigonometry), and estimator and
-// pdf agree exactly. What a camera or a mirror sees directly is interpolated bilinearly
-// (eval_smooth) so backgrounds do not look blocky; that radiance is not integrated.
-// Negative texels (some HDR files have them) are read as 0 on load and counted
-// (negative_texels(); the scene loader reports them in Scene::load_notes). A texel brighter than
-// kMaxEnvironmentRadiance (after scale) is refused (Error naming the map and the pixel): a
+// over texels (eval): the sampling density is then exactly luminance x sin(theta) per texel
+// (per tile of f x f texels on a smooth map, Distribution2D::tile(): a sky without a sun disc
+// samples from a table that stays in cache), an environment sample's radiance is one texel
+// read (no trigonometry), and estimator and pdf agree exactly. What a camera or a mirror sees
+// directly is interpolated bilinearly (eval_smooth) so backgrounds do not look blocky; that
+// radiance is not integrated. Negative texels (some HDR files have them) are read as 0 on load and
+// counted (negative_texels(); the scene loader reports them in Scene::load_notes). A texel brighter
+// than kMaxEnvironmentRadiance (after scale) is refused (Error naming the map and the pixel): a
 // finite 1e38 in an HDR file turns every estimate into Inf (found by fuzz_env_hdr).
 constexpr float kMaxEnvironmentRadiance = 1e20f;
 class EnvironmentMap {
@@ -65,7 +66,7 @@ class EnvironmentMap {
     // Both for n samples at once, in loops the compiler vectorizes (math/fast_math.h instead of
     // libm), split where the memory is read so that a caller can compute between starting the
     // reads and using them (the texels' cache misses were most of the integrator's time):
-    // - sample_directions(): sample_at()'s directions for the chosen texels and in-texel
+    // - sample_directions(): sample_at()'s directions for the chosen texels and in-tile
     //   positions (u.z, u.w) of `u`, and their sin(theta); reads no texel;
     // - lookup_texels(): the texels holding n directions and their sin(theta); prefetches them;
     // - texel_values(): radiance and solid-angle pdf of n samples from texels and sin(theta).

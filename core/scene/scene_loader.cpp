@@ -442,6 +442,16 @@ Scene parse_scene(const std::string& text, const std::string& origin,
                     "': " + std::to_string(l.environment->negative_texels()) +
                     " texels with negative radiance (down to " + lowest + ") read as 0");
             }
+            if (l.environment && l.environment->distribution().tile() > 1) {
+                const Distribution2D& d = l.environment->distribution();
+                char inflation[32];
+                std::snprintf(inflation, sizeof inflation, "%.4f", d.inflation());
+                scene.load_notes.push_back(
+                    lights.at(i).path() + ": '" + l.environment->source() +
+                    "' importance-sampled by tiles of " + std::to_string(d.tile()) + " x " +
+                    std::to_string(d.tile()) + " texels (smooth map; second moment x " + inflation +
+                    ")");
+            }
             scene.lights.push_back(std::move(l));
         }
     }
