@@ -147,46 +147,50 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
         stats_.correction_straddling = corrections_->straddling_texels();
         stats_.rays += corrections_->rays();
     }
-    long rows = 0;
-    for (const ObjectLightmap& m : maps_) rows += m.height;
+    // One loop over every map's rows (a loop per map waited at each of valley's 50 maps for
+    // its last rows, on every pass); the split into shares numbers the rows the same way.
+    std::vector<long> map_row0(maps_.size() + 1, 0);  // global number of each map's row 0
+    for (size_t mi = 0; mi < maps_.size(); ++mi) {
+        map_row0[mi + 1] = map_row0[mi] + maps_[mi].height;
+        if (mc_rates_.size() <= mi) mc_rates_.push_back(texel_mc_rates(maps_[mi], estimator_));
+    }
+    const long rows = map_row0.back();
     if (progress) progress->begin_stage("bake " + std::string(to_string(method_)), rows);
     std::atomic<long> rays{0}, queries{0}, guarded{0};
     const int first = samples_;
-    long map_row0 = 0;  // global number of this map's row 0 (the shares' split)
-    for (size_t mi = 0; mi < maps_.size(); ++mi) {
-        const ObjectLightmap& map = maps_[mi];
-        if (mc_rates_.size() <= mi) mc_rates_.push_back(texel_mc_rates(map, estimator_));
-        const std::vector<float>& rates = mc_rates_[mi];
-        tbb::parallel_for(0, map.height, [&](int y) {
-            progress ? progress->checkpoint() : process_checkpoint();
-            if (!in_share(map_row0 + y, share_index_)) {
-                if (progress) progress->advance();
-                return;
-            }
-            BakeCounters counters;
-            for (int x = 0; x < map.width; ++x) {
-                const size_t i = size_t(y) * map.width + x;
-                const LightmapTexel& t = map.texels[i];
-                if (t.state != TexelState::Valid) continue;
-                // Summed sample by sample into the running total: the same additions in the
-                // same order whatever the split into passes.
-                UnoccludedSingle single;
-                UnoccludedSingle* files = single_sums_[mi].empty() ? nullptr : &single;
-                for (int s = first; s < first + samples; ++s) {
-                    CounterRng rng = texel_random(settings_.seed, mi, i, s);
-                    sums_[mi][i] += estimator_.estimate(t.position, t.normal, t.albedo, rng,
-                                                        counters, &fixed_[mi][i],
-                                                        &deferred_sums_[mi][i], rates[i], files);
-                }
-                if (files) single_sums_[mi][i] += single;
-            }
-            rays += counters.rays;
-            queries += counters.impulse_queries;
-            guarded += counters.guarded;
+    tbb::parallel_for(long(0), rows, [&](long row) {
+        progress ? progress->checkpoint() : process_checkpoint();
+        if (!in_share(row, share_index_)) {
             if (progress) progress->advance();
-        });
-        map_row0 += map.height;
-    }
+            return;
+        }
+        const size_t mi =
+            size_t(std::upper_bound(map_row0.begin(), map_row0.end(), row) - map_row0.begin()) - 1;
+        const ObjectLightmap& map = maps_[mi];
+        const std::vector<float>& rates = mc_rates_[mi];
+        const int y = int(row - map_row0[mi]);
+        BakeCounters counters;
+        for (int x = 0; x < map.width; ++x) {
+            const size_t i = size_t(y) * map.width + x;
+            const LightmapTexel& t = map.texels[i];
+            if (t.state != TexelState::Valid) continue;
+            // Summed sample by sample into the running total: the same additions in the
+            // same order whatever the split into passes.
+            UnoccludedSingle single;
+            UnoccludedSingle* files = single_sums_[mi].empty() ? nullptr : &single;
+            for (int s = first; s < first + samples; ++s) {
+                CounterRng rng = texel_random(settings_.seed, mi, i, s);
+                sums_[mi][i] +=
+                    estimator_.estimate(t.position, t.normal, t.albedo, rng, counters,
+                                        &fixed_[mi][i], &deferred_sums_[mi][i], rates[i], files);
+            }
+            if (files) single_sums_[mi][i] += single;
+        }
+        rays += counters.rays;
+        queries += counters.impulse_queries;
+        guarded += counters.guarded;
+        if (progress) progress->advance();
+    });
     // Probes: keyed after the lightmaps (index maps_.size()).
     tbb::parallel_for(size_t(0), probe_positions_.size(), [&](size_t i) {
         if (!in_share(long(i), share_index_)) return;
