@@ -93,24 +93,18 @@ Distribution2D::Distribution2D(const std::vector<float>& weights, int width, int
     std::vector<double> tile_weight(n, 0.0);
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x)
-            tile_weight[size_t(y >> tile_shift_) * tiles_x_ + size_t(x >> tile_shift_)] +=
-                std::max(weights[size_t(y) * width + x], 0.0f);
+            tile_weight[tile_index(x, y)] += std::max(weights[size_t(y) * width + x], 0.0f);
     double sum = 0.0;
     for (size_t i = 0; i < n; ++i) sum += tile_weight[i];
-    std::vector<float> tile_pdf(n);
+    pdf_.resize(n);
     alias_.resize(n);
     for (size_t i = 0; i < n; ++i) {
         // All-zero weights: fall back to uniform rather than divide by zero.
-        tile_pdf[i] = sum > 0 ? float(tile_weight[i] * double(n) / sum) : 1.0f;
+        pdf_[i] = sum > 0 ? float(tile_weight[i] * double(n) / sum) : 1.0f;
         alias_[i] = AliasEntry{1.0f, uint32_t(i)};
     }
-    pdf_.resize(size_t(width) * height);
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x)
-            pdf_[size_t(y) * width + x] =
-                tile_pdf[size_t(y >> tile_shift_) * tiles_x_ + size_t(x >> tile_shift_)];
     // Vose's construction on scaled probabilities p_i * n (mean 1).
-    std::vector<double> scaled(tile_pdf.begin(), tile_pdf.end());
+    std::vector<double> scaled(pdf_.begin(), pdf_.end());
     std::vector<uint32_t> small, large;
     for (size_t i = 0; i < n; ++i) (scaled[i] < 1.0 ? small : large).push_back(uint32_t(i));
     while (!small.empty() && !large.empty()) {
@@ -131,7 +125,7 @@ Distribution2D::Distribution2D(const std::vector<float>& weights, int width, int
     column_cdf_.assign(size_t(th) * (size_t(tw) + 1), 0.0);
     for (int y = 0; y < th; ++y) {
         double* row = &column_cdf_[size_t(y) * (size_t(tw) + 1)];
-        for (int x = 0; x < tw; ++x) row[x + 1] = row[x] + tile_pdf[size_t(y) * tw + x];
+        for (int x = 0; x < tw; ++x) row[x + 1] = row[x] + pdf_[size_t(y) * tw + x];
         row_cdf_[size_t(y) + 1] = row_cdf_[size_t(y)] + row[tw];
         if (row[tw] > 0.0)
             for (int x = 1; x <= tw; ++x) row[x] /= row[tw];
@@ -148,7 +142,6 @@ Distribution2D::Distribution2D(const std::vector<float>& weights, int width, int
 }
 
 int Distribution2D::texel_in_tile(int tile_x, int tile_y, vec2 within) const {
-    if (tile_shift_ == 0) return tile_y * width_ + tile_x;
     const int f = 1 << tile_shift_;
     const int x = (tile_x << tile_shift_) + std::min(int(within.x * float(f)), f - 1);
     const int y = (tile_y << tile_shift_) + std::min(int(within.y * float(f)), f - 1);
@@ -203,18 +196,18 @@ vec2 Distribution2D::texel_point(int texel, const vec4& u) const {
 
 vec2 Distribution2D::sample(const vec4& u, float* pdf) const {
     const int i = sample_texel(u);
-    *pdf = pdf_[size_t(i)];
+    *pdf = texel_pdf(i);
     return texel_point(i, u);
 }
 
 float Distribution2D::pdf(vec2 uv) const {
     const int x = std::clamp(int(uv.x * width_), 0, width_ - 1);
     const int y = std::clamp(int(uv.y * height_), 0, height_ - 1);
-    return pdf_[size_t(y) * width_ + x];
+    return pdf_[tile_index(x, y)];
 }
 
 double Distribution2D::texel_probability(int x, int y) const {
-    return double(pdf_[size_t(y) * width_ + x]) / double(pdf_.size());
+    return double(pdf_[tile_index(x, y)]) / (double(width_) * double(height_));
 }
 
 }  // namespace freqlab

@@ -72,7 +72,7 @@ class Distribution2D {
     // overlap those cache misses.
     void prefetch(const vec4& u) const { __builtin_prefetch(&alias_[alias_slot(u)]); }
     float pdf(vec2 uv) const;
-    float texel_pdf(int index) const { return pdf_[size_t(index)]; }
+    float texel_pdf(int index) const { return pdf_[tile_index(index % width_, index / width_)]; }
     int width() const { return width_; }
     int height() const { return height_; }
     // Probability mass of texel (x, y): what a chi-square test compares counts against.
@@ -84,6 +84,10 @@ class Distribution2D {
     }
     // The texel of tile (tile_x, tile_y) at position `within` inside it.
     int texel_in_tile(int tile_x, int tile_y, vec2 within) const;
+    // The tile holding texel (x, y).
+    size_t tile_index(int x, int y) const {
+        return size_t(y >> tile_shift_) * size_t(tiles_x_) + size_t(x >> tile_shift_);
+    }
     int width_ = 0, height_ = 0;
     int tile_shift_ = 0, tiles_x_ = 0, tiles_y_ = 0;  // the tables below are over tiles
     double inflation_ = 1.0;
@@ -91,7 +95,7 @@ class Distribution2D {
         float keep;      // probability of keeping texel i
         uint32_t alias;  // the texel taken otherwise
     };
-    std::vector<float> pdf_;            // density over [0,1)^2 of each texel (its tile's)
+    std::vector<float> pdf_;            // density over [0,1)^2 of each tile
     HugePageVector<AliasEntry> alias_;  // packed: one cache line per draw, not two
     // Double precision so that a dim texel keeps its own mass (a float sum of a 2048-texel row
     // rounds masses below ~1e-7 of the row away).
