@@ -318,13 +318,18 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
     lookup_ = LightmapLookup(maps, rays.scene().objects.size());
     packed_.resize(maps.size());
     triangles_.resize(maps.size());
-    std::atomic<long> rays_cast{0}, computed{0};
-    long straddling = 0;
+    std::atomic<long> rays_cast{0}, computed{0}, straddling{0};
     scene_ = &rays;
     for (size_t mi = 0; mi < maps.size(); ++mi) {
-        const ObjectLightmap& map = maps[mi];
-        int& of_object = map_of_object_[size_t(map.object)];
+        int& of_object = map_of_object_[size_t(maps[mi].object)];
         of_object = of_object == -1 ? int(mi) : kSeveralPages;
+    }
+    // The maps side by side, each with its own parallel loops: a map's serial steps (its
+    // packing, the means of the texels that do not run) overlap other maps' work (valley: 50
+    // maps, most of them small). Every texel's random numbers are keyed by map and texel, so
+    // the field does not depend on the order.
+    tbb::parallel_for(size_t(0), maps.size(), [&](size_t mi) {
+        const ObjectLightmap& map = maps[mi];
         triangles_[mi].resize(map.triangle_uv.size() / 3);
         tbb::parallel_for(size_t(0), triangles_[mi].size(),
                           [&](size_t t) { triangles_[mi][t] = triangle_to_texels(rays, map, t); });
@@ -332,7 +337,7 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
         const MapTerms terms = estimate_map(rays, estimator, map, maps.size() + 1 + mi,
                                             settings.seed, rays_cast, computed);
         straddling += pack_map(map, terms, paths_, packed_[mi]);
-    }
+    });
     rays_ = rays_cast;
     computed_ = computed;
     straddling_ = straddling;
