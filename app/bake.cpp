@@ -29,18 +29,81 @@ namespace freqlab {
 
 namespace {
 
-json error_against(const fs::path& reference_dir, const std::string& name, const LayerSet& test,
-                   const std::vector<uint8_t>& shadowed) {
-    const fs::path file = reference_dir / (name + ".exr");
-    if (!fs::exists(file))
-        throw Error(file.string(), "--reference", "no reference lightmap for '" + name + "'");
-    const ExrFile ref = read_exr(file);
+// Two reference directories must be halves of one reference: the same scene, method and
+// samples (their stats.json), two seeds. Checked before anything is baked or written.
+void check_reference_halves(const std::vector<std::string>& dirs) {
+    json stats[2];
+    for (int k = 0; k < 2; ++k) {
+        const fs::path file = fs::path(dirs[size_t(k)]) / "stats.json";
+        try {
+            stats[k] = json::parse(read_text_file(file));
+        } catch (const json::exception& e) {
+            throw Error(file.string(), "--reference", std::string("unreadable: ") + e.what());
+        }
+    }
+    auto field = [&](int k, const char* a, const char* b = nullptr) {
+        const json& j = stats[k].value(a, json());
+        return b ? (j.is_object() ? j.value(b, json()) : json()) : j;
+    };
+    const std::string second = (fs::path(dirs[1]) / "stats.json").string();
+    for (const char* key : {"scene", "method"})
+        if (field(0, key) != field(1, key))
+            throw Error(second, key,
+                        "the two references differ (" + field(0, key).dump() + " vs " +
+                            field(1, key).dump() + "): expected two seeds of one bake");
+    const json spp[2] = {field(0, "stats", "spp"), field(1, "stats", "spp")};
+    if (spp[0] != spp[1])
+        throw Error(second, "stats.spp",
+                    "the two references differ (" + spp[0].dump() + " vs " + spp[1].dump() +
+                        "): expected two seeds of one bake");
+    const json seed[2] = {field(0, "settings", "bake"), field(1, "settings", "bake")};
+    const json s0 = seed[0].is_object() ? seed[0].value("seed", json()) : json();
+    const json s1 = seed[1].is_object() ? seed[1].value("seed", json()) : json();
+    if (s0.is_null() || s0 == s1)
+        throw Error(second, "settings.bake.seed",
+                    "both references have seed " + s0.dump() +
+                        ": halves must be independent (bake one with another --seed)");
+}
+
+// The reference bake's lightmaps: one directory, or two independent halves of one.
+struct ReferenceLightmap {
+    ExrFile a, b;
+    bool halves = false;
+};
+
+ReferenceLightmap read_reference(const std::vector<std::string>& dirs, const std::string& name) {
+    ReferenceLightmap r;
+    for (size_t k = 0; k < dirs.size(); ++k) {
+        const fs::path file = fs::path(dirs[k]) / (name + ".exr");
+        if (!fs::exists(file))
+            throw Error(file.string(), "--reference", "no reference lightmap for '" + name + "'");
+        (k == 0 ? r.a : r.b) = read_exr(file);
+    }
+    r.halves = dirs.size() == 2;
+    if (!r.halves) return r;
+    // Halves of one reference: the same scene, method and samples, another seed.
+    const json& pa = r.a.provenance;
+    const json& pb = r.b.provenance;
+    for (const char* key : {"scene_hash", "method"})
+        if (pa.value(key, json()) != pb.value(key, json()))
+            throw Error(dirs[1] + "/" + name + ".exr", std::string("provenance.") + key,
+                        "the two references differ (" + pa.value(key, json()).dump() + " vs " +
+                            pb.value(key, json()).dump() + "): expected halves of one bake");
+    return r;
+}
+
+json error_against(const std::vector<std::string>& reference_dirs, const std::string& name,
+                   const LayerSet& test, const std::vector<uint8_t>& shadowed) {
+    const ReferenceLightmap ref_files = read_reference(reference_dirs, name);
+    const ExrFile& ref = ref_files.a;
+    const LayerSet* half = ref_files.halves ? &ref_files.b.layers : nullptr;
     json out = json::object();
     for (const char* layer : {"lm_irradiance", "lm_total", "lm_surface", "lm_inscatter_single",
                               "lm_inscatter_multiple"}) {
         if (!ref.layers.find(layer) || !test.find(layer)) continue;
         constexpr size_t kWorstTexels = 8;
-        const LightmapError e = compare_lightmaps(test, ref.layers, layer, nullptr, kWorstTexels);
+        const LightmapError e =
+            compare_lightmaps(test, ref.layers, layer, nullptr, kWorstTexels, half);
         json worst = json::array();
         for (const TexelError& t : e.worst)
             worst.push_back({{"x", t.x},
@@ -52,9 +115,23 @@ json error_against(const fs::path& reference_dir, const std::string& name, const
                       {"texels_lit", e.texels_lit}, {"rmse", e.rmse},
                       {"rel_l2", e.rel_l2},         {"texels", e.texels},
                       {"worst_texels", worst}};
+        if (half) {
+            out[layer]["reference_noise"] = e.reference_noise;
+            out[layer]["reference_noise_lit"] = e.reference_noise_lit;
+        }
     }
     if (ref.layers.find("lm_inscatter_single") && test.find("lm_inscatter_single")) {
-        const RegionComparison c = compare_region(test, ref.layers, shadowed);
+        LayerSet mean = ref.layers;
+        if (half)
+            for (const char* layer :
+                 {"lm_irradiance", "lm_inscatter_single", "lm_inscatter_multiple"})
+                if (mean.find(layer) && half->find(layer)) {
+                    std::vector<float>& m = mean.find(layer)->data;
+                    const std::vector<float>& h = half->find(layer)->data;
+                    for (size_t k = 0; k < m.size() && k < h.size(); ++k)
+                        m[k] = 0.5f * (m[k] + h[k]);
+                }
+        const RegionComparison c = compare_region(test, mean, shadowed);
         out["shadowed"] = {{"texels", c.texels},
                            {"lm_irradiance_relmse", c.irradiance_relmse},
                            {"lm_irradiance_mean", c.test_irradiance},
@@ -63,6 +140,37 @@ json error_against(const fs::path& reference_dir, const std::string& name, const
                            {"inscatter_ratio", c.inscatter_ratio}};
     }
     return out;
+}
+
+// The error of the whole bake: each lightmap's lm_irradiance measures, texel-weighted (the
+// lit ones by their lit texels), with the reference's own noise when it came in halves.
+json error_over_lightmaps(const json& maps) {
+    double relmse = 0.0, lit = 0.0, noise = 0.0, noise_lit = 0.0;
+    long texels = 0, texels_lit = 0;
+    bool halves = false;
+    for (const json& m : maps) {
+        const json& e = m["error"]["lm_irradiance"];
+        if (e.is_null()) continue;
+        const long n = e["texels"].get<long>(), nl = e["texels_lit"].get<long>();
+        relmse += e["relmse"].get<double>() * double(n);
+        lit += e["relmse_lit"].get<double>() * double(nl);
+        if (e.contains("reference_noise")) {
+            halves = true;
+            noise += e["reference_noise"].get<double>() * double(n);
+            noise_lit += e["reference_noise_lit"].get<double>() * double(nl);
+        }
+        texels += n;
+        texels_lit += nl;
+    }
+    json out = {{"texels", texels},
+                {"texels_lit", texels_lit},
+                {"relmse", texels > 0 ? relmse / double(texels) : 0.0},
+                {"relmse_lit", texels_lit > 0 ? lit / double(texels_lit) : 0.0}};
+    if (halves) {
+        out["reference_noise"] = texels > 0 ? noise / double(texels) : 0.0;
+        out["reference_noise_lit"] = texels_lit > 0 ? noise_lit / double(texels_lit) : 0.0;
+    }
+    return {{"lm_irradiance", out}};
 }
 
 // Every method's mean estimate at one texel, side by side (same samples count, same keys).
@@ -154,8 +262,10 @@ int run_bake(const BakeArgs& args) {
     if (args.spp > 0) group.apply_assignment("bake.spp=" + std::to_string(args.spp), "--spp");
     if (args.seed >= 0) group.apply_assignment("bake.seed=" + std::to_string(args.seed), "--seed");
     if (args.out.empty()) throw Error("--out", "", "expected an output directory");
-    if (!args.reference.empty() && !fs::is_directory(args.reference))
-        throw Error(args.reference, "--reference", "expected a directory written by freqlab bake");
+    for (const std::string& dir : args.reference)
+        if (!fs::is_directory(dir))
+            throw Error(dir, "--reference", "expected a directory written by freqlab bake");
+    if (args.reference.size() == 2) check_reference_halves(args.reference);
 
     // Under mpirun every rank bakes its share of the texel rows (lightmap_baker.h) and rank 0
     // gathers them and writes everything: the same bytes as one process.
@@ -272,6 +382,7 @@ int run_bake(const BakeArgs& args) {
         maps.push_back(entry);
     }
     report["lightmaps"] = maps;
+    if (!args.reference.empty()) report["error"] = error_over_lightmaps(maps);
     if (!baker.probes().empty()) {
         write_text_atomically(fs::path(args.out) / "probes.json",
                               baker.probes_json().dump(1) + "\n");

@@ -72,7 +72,9 @@ struct BakeArgs {
     int seed = -1;  // -1 keeps bake.seed
     int threads = 0;
     std::vector<std::string> sets;
-    std::string reference;  // a directory of a reference bake: errors per lightmap
+    // Directories of a reference bake (errors per lightmap), or of two independent halves of
+    // one (their mean is the reference; their difference measures its noise).
+    std::vector<std::string> reference;
     bool compare_surface = false;
     std::string debug_texel;  // [LIGHTMAP:]X,Y
     std::string preview_size = "640x360";

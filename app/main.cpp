@@ -208,7 +208,10 @@ int main(int argc, char** argv) {
     bake->add_option("--threads", bk.threads, "worker threads (0 = all cores)");
     bake->add_option("--set", bk.sets, "key=value setting (repeatable)");
     bake->add_option("--reference", bk.reference,
-                     "directory of a reference bake: relMSE / RMSE per lightmap layer");
+                     "directory of a reference bake: relMSE / RMSE per lightmap layer; given "
+                     "twice (two seeds of one bake), their mean, and the noise it leaves in "
+                     "the relMSE")
+        ->expected(1, 2);
     bake->add_flag("--compare-surface", bk.compare_surface,
                    "also run a surface bake at equal samples and report the overhead");
     bake->add_option("--debug-texel", bk.debug_texel,

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <random>
 
 #include "base/error.h"
 #include "image/metrics.h"
@@ -182,4 +184,42 @@ TEST(LightmapMeasures, WorstTexelsAreTheLargestRelMseTerms) {
     // Over the lit texels (reference >= 2 % of its mean) the dark one does not count.
     EXPECT_EQ(e.texels_lit, w * h - 1);
     EXPECT_NEAR(e.relmse_lit, 3 * 0.25 / (1.0 + eps * eps) / (3.0 * (w * h - 1)), 1e-12);
+}
+
+// A reference given as two independent halves (compare_lightmaps' ref_half): the reference is
+// their mean and reference_noise estimates the relMSE its own noise adds, texel by texel from
+// the halves' difference ((a - b)^2 / 4, the variance of the mean of two). Synthetic lightmaps
+// with known noise: truth 1-3, each half +- N(0, 0.06), the test +- N(0, 0.03); with noise this
+// small against the truth the weights 1 / r^2 are nearly fixed, so reference_noise =
+// mean(0.06^2 / 2 / truth^2) and relmse - reference_noise = mean(0.03^2 / truth^2), each to
+// ~0.5 % over 3 x 40000 channels (2 % allowed; a factor 2 in the estimate misses by 50 %).
+TEST(LightmapMeasures, ReferenceHalvesMeasureTheReferencesOwnNoise) {
+    const int w = 200, h = 200;
+    LayerSet test(w, h), half_a(w, h), half_b(w, h);
+    for (LayerSet* set : {&test, &half_a, &half_b}) {
+        Layer& valid = set->add("texel_valid", LayerKind::Categorical, 1);
+        std::fill(valid.data.begin(), valid.data.end(), float(TexelState::Valid));
+        set->add("lm_irradiance", LayerKind::Color, 3);
+    }
+    std::mt19937 gen(7);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    const double sigma_ref = 0.06, sigma_test = 0.03;
+    double want_noise = 0.0, want_own = 0.0;
+    const size_t n = size_t(w) * h * 3;
+    for (size_t k = 0; k < n; ++k) {
+        const double truth = 1.0 + 2.0 * double(k % 997) / 996.0;
+        half_a.find("lm_irradiance")->data[k] = float(truth + sigma_ref * normal(gen));
+        half_b.find("lm_irradiance")->data[k] = float(truth + sigma_ref * normal(gen));
+        test.find("lm_irradiance")->data[k] = float(truth + sigma_test * normal(gen));
+        want_noise += sigma_ref * sigma_ref / 2.0 / (truth * truth) / double(n);
+        want_own += sigma_test * sigma_test / (truth * truth) / double(n);
+    }
+    const LightmapError e = compare_lightmaps(test, half_a, "lm_irradiance", nullptr, 0, &half_b);
+    std::printf("reference noise %.6f (want %.6f), own %.6f (want %.6f)\n", e.reference_noise,
+                want_noise, e.relmse - e.reference_noise, want_own);
+    EXPECT_NEAR(e.reference_noise, want_noise, 0.02 * want_noise);
+    EXPECT_NEAR(e.relmse - e.reference_noise, want_own, 0.02 * want_own);
+    EXPECT_NEAR(e.reference_noise_lit, e.reference_noise, 1e-12) << "every texel is lit";
+    // One reference: its noise is not known.
+    EXPECT_EQ(compare_lightmaps(test, half_a, "lm_irradiance").reference_noise, -1.0);
 }

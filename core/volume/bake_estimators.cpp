@@ -544,11 +544,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
                                     : prepass          ? prepass_surface_depth_
                                                        : depth + 1;
         texel.surface_light = &surface_light;
-        const vec3 ld = sample_cosine_hemisphere(rng.next_float(), rng.next_float());
-        if (ld.z > 1e-6f)
-            mc.multiple +=
-                walk(origin(p, n), Frame(n).to_world(ld), vec3(kPi), rng, counters, &texel)
-                    .multiple;
+        mc.multiple += texel_walk_from(p, n, rng, counters, texel).multiple;
         // The prepass files surface light under `surface`, where nothing else of the texel's
         // own Monte Carlo terms lands (no indirect segment runs there): the field keeps it apart.
         if (prepass)

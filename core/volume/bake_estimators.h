@@ -431,6 +431,10 @@ class BakeEstimator {
     // no direction (the walk ends).
     bool sample_walk_direction(const vec3& x, const vec3& axis, const double* g, bool aim,
                                CounterRng& rng, vec3* dir, float* weight) const;
+    // The texel walk from p (the bake's and trace_texel's one copy): a cosine-sampled first
+    // direction, then walk() in TexelWalk mode.
+    IrradianceParts texel_walk_from(const vec3& p, const vec3& n, CounterRng& rng,
+                                    BakeCounters& counters, const TexelWalk& texel) const;
     // Impulse's texel vertices take their multiple scattering from a walk (BakeSettings).
     bool texel_walk() const;
     // ... and the in-scattered light of other surfaces (BakeSettings::texel_surface_light).

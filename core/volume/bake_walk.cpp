@@ -115,6 +115,15 @@ bool BakeEstimator::sample_walk_direction(const vec3& x, const vec3& axis, const
     return std::isfinite(*weight);
 }
 
+IrradianceParts BakeEstimator::texel_walk_from(const vec3& p, const vec3& n, CounterRng& rng,
+                                               BakeCounters& counters,
+                                               const TexelWalk& texel) const {
+    // Cosine-sampled: irradiance = pi x radiance.
+    const vec3 local = sample_cosine_hemisphere(rng.next_float(), rng.next_float());
+    if (local.z <= 1e-6f) return IrradianceParts{};
+    return walk(origin(p, n), Frame(n).to_world(local), vec3(kPi), rng, counters, &texel);
+}
+
 IrradianceParts BakeEstimator::volume_path(const vec3& p, const vec3& n, CounterRng& rng,
                                            BakeCounters& counters) const {
     IrradianceParts parts;

@@ -162,12 +162,20 @@ struct TexelError {
 struct LightmapError {
     double relmse = 0.0, rmse = 0.0, rel_l2 = 0.0, relmse_lit = 0.0;
     long texels = 0, texels_lit = 0;
+    // With two reference halves: the relMSE that the reference (their mean) has against the
+    // truth by its own noise, over all and over the lit texels; every measured relMSE holds it
+    // on average (E (t - r)^2 = (t - truth)^2 + var r). -1: one reference, not known.
+    double reference_noise = -1.0, reference_noise_lit = -1.0;
     std::vector<TexelError> worst;
 };
 // Throws Error when sizes differ or a layer is missing. `only` (one flag per texel), when
-// given, restricts the measure to the flagged valid texels (shadowed_texels.h).
+// given, restricts the measure to the flagged valid texels (shadowed_texels.h). `ref_half`,
+// when given, is a second reference independent of `ref` (another seed, the same samples): the
+// reference is then their mean, and its own noise is estimated texel by texel from their
+// difference, (a - b)^2 / 4 (the variance of the mean of two), weighted as the relMSE weighs.
 LightmapError compare_lightmaps(const LayerSet& test, const LayerSet& ref, const std::string& layer,
-                                const std::vector<uint8_t>* only = nullptr, size_t worst = 0);
+                                const std::vector<uint8_t>* only = nullptr, size_t worst = 0,
+                                const LayerSet* ref_half = nullptr);
 // The luminance of an RGB layer summed over the lightmap's valid texels (the texels
 // compare_lightmaps measures; `only` as there); throws Error when a layer is missing.
 double valid_texel_luminance_sum(const LayerSet& lightmap, const std::string& layer,

@@ -275,11 +275,8 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
         double sum = 0.0, sum2 = 0.0;
         const TexelWalk emitters_only;
         for (int i = 0; i < kDraws; ++i) {
-            const vec3 ld = sample_cosine_hemisphere(rng.next_float(), rng.next_float());
-            if (ld.z <= 1e-6f) continue;
-            const double v = luminance(
-                walk(origin(p, n), Frame(n).to_world(ld), vec3(kPi), rng, counters, &emitters_only)
-                    .multiple);
+            const double v =
+                luminance(texel_walk_from(p, n, rng, counters, emitters_only).multiple);
             sum += v, sum2 += v * v;
         }
         const double mean = sum / kDraws;
@@ -294,11 +291,7 @@ std::vector<std::string> BakeEstimator::trace_texel(const vec3& p, const vec3& n
         surfaces.surface_light_depth = 1;
         IrradianceParts sum;
         surfaces.surface_light = &sum;
-        for (int i = 0; i < kDraws; ++i) {
-            const vec3 ld = sample_cosine_hemisphere(rng.next_float(), rng.next_float());
-            if (ld.z > 1e-6f)
-                walk(origin(p, n), Frame(n).to_world(ld), vec3(kPi), rng, counters, &surfaces);
-        }
+        for (int i = 0; i < kDraws; ++i) texel_walk_from(p, n, rng, counters, surfaces);
         line(
             "other surfaces' light scattered on its way here, by the texel's walk (%d draws): "
             "single %.5g, multiple %.5g (bake.texel_surface_light = walk)",
