@@ -59,7 +59,10 @@ void check_reference_halves(const std::vector<std::string>& dirs) {
     const json seed[2] = {field(0, "settings", "bake"), field(1, "settings", "bake")};
     const json s0 = seed[0].is_object() ? seed[0].value("seed", json()) : json();
     const json s1 = seed[1].is_object() ? seed[1].value("seed", json()) : json();
-    if (s0.is_null() || s0 == s1)
+    if (s0.is_null() || s1.is_null())
+        throw Error((fs::path(dirs[s0.is_null() ? 0 : 1]) / "stats.json").string(),
+                    "settings.bake.seed", "missing: expected a stats.json written by freqlab bake");
+    if (s0 == s1)
         throw Error(second, "settings.bake.seed",
                     "both references have seed " + s0.dump() +
                         ": halves must be independent (bake one with another --seed)");
@@ -149,8 +152,8 @@ json error_over_lightmaps(const json& maps) {
     long texels = 0, texels_lit = 0;
     bool halves = false;
     for (const json& m : maps) {
+        if (!m.contains("error") || !m["error"].contains("lm_irradiance")) continue;
         const json& e = m["error"]["lm_irradiance"];
-        if (e.is_null()) continue;
         const long n = e["texels"].get<long>(), nl = e["texels_lit"].get<long>();
         relmse += e["relmse"].get<double>() * double(n);
         lit += e["relmse_lit"].get<double>() * double(nl);
