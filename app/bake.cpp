@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 
 #include "base/error.h"
 #include "base/file_io.h"
@@ -41,37 +42,32 @@ void check_reference_halves(const std::vector<std::string>& dirs) {
             throw Error(file.string(), "--reference", std::string("unreadable: ") + e.what());
         }
     }
-    auto field = [&](int k, const char* a, const char* b = nullptr) {
-        const json& j = stats[k].value(a, json());
-        return b ? (j.is_object() ? j.value(b, json()) : json()) : j;
-    };
     const std::string second = (fs::path(dirs[1]) / "stats.json").string();
-    for (const char* key : {"scene", "method"})
-        if (field(0, key) != field(1, key))
-            throw Error(second, key,
-                        "the two references differ (" + field(0, key).dump() + " vs " +
-                            field(1, key).dump() + "): expected two seeds of one bake");
-    const json spp[2] = {field(0, "stats", "spp"), field(1, "stats", "spp")};
-    if (spp[0] != spp[1])
-        throw Error(second, "stats.spp",
-                    "the two references differ (" + spp[0].dump() + " vs " + spp[1].dump() +
-                        "): expected two seeds of one bake");
-    const json seed[2] = {field(0, "settings", "bake"), field(1, "settings", "bake")};
-    const json s0 = seed[0].is_object() ? seed[0].value("seed", json()) : json();
-    const json s1 = seed[1].is_object() ? seed[1].value("seed", json()) : json();
-    if (s0.is_null() || s1.is_null())
-        throw Error((fs::path(dirs[s0.is_null() ? 0 : 1]) / "stats.json").string(),
-                    "settings.bake.seed", "missing: expected a stats.json written by freqlab bake");
-    if (s0 == s1)
+    for (const char* key : {"/scene", "/method", "/stats/spp"}) {
+        const json a = stats[0].value(json::json_pointer(key), json());
+        const json b = stats[1].value(json::json_pointer(key), json());
+        if (a != b)
+            throw Error(second, key + 1,
+                        "the two references differ (" + a.dump() + " vs " + b.dump() +
+                            "): expected two seeds of one bake");
+    }
+    const json::json_pointer seed("/settings/bake/seed");
+    for (int k = 0; k < 2; ++k)
+        if (!stats[k].contains(seed))
+            throw Error((fs::path(dirs[size_t(k)]) / "stats.json").string(), "settings.bake.seed",
+                        "missing: expected a stats.json written by freqlab bake");
+    if (stats[0][seed] == stats[1][seed])
         throw Error(second, "settings.bake.seed",
-                    "both references have seed " + s0.dump() +
+                    "both references have seed " + stats[0][seed].dump() +
                         ": halves must be independent (bake one with another --seed)");
 }
 
-// The reference bake's lightmaps: one directory, or two independent halves of one.
+// The reference bake's lightmap: one directory's, or two independent halves' (their mean for
+// the measures that take one reference).
 struct ReferenceLightmap {
-    ExrFile a, b;
-    bool halves = false;
+    LayerSet layers;               // the first half, or the only reference
+    std::optional<LayerSet> half;  // the second half
+    LayerSet mean;                 // of the halves (layers when there is one)
 };
 
 ReferenceLightmap read_reference(const std::vector<std::string>& dirs, const std::string& name) {
@@ -80,26 +76,25 @@ ReferenceLightmap read_reference(const std::vector<std::string>& dirs, const std
         const fs::path file = fs::path(dirs[k]) / (name + ".exr");
         if (!fs::exists(file))
             throw Error(file.string(), "--reference", "no reference lightmap for '" + name + "'");
-        (k == 0 ? r.a : r.b) = read_exr(file);
+        LayerSet layers = read_exr(file).layers;
+        if (k == 0)
+            r.layers = std::move(layers);
+        else
+            r.half = std::move(layers);
     }
-    r.halves = dirs.size() == 2;
-    if (!r.halves) return r;
-    // Halves of one reference: the same scene, method and samples, another seed.
-    const json& pa = r.a.provenance;
-    const json& pb = r.b.provenance;
-    for (const char* key : {"scene_hash", "method"})
-        if (pa.value(key, json()) != pb.value(key, json()))
-            throw Error(dirs[1] + "/" + name + ".exr", std::string("provenance.") + key,
-                        "the two references differ (" + pa.value(key, json()).dump() + " vs " +
-                            pb.value(key, json()).dump() + "): expected halves of one bake");
+    r.mean = r.layers;
+    if (r.half)
+        for (Layer& m : r.mean.layers())
+            if (const Layer* h = r.half->find(m.name); h && h->data.size() == m.data.size())
+                for (size_t k = 0; k < m.data.size(); ++k)
+                    m.data[k] = 0.5f * (m.data[k] + h->data[k]);
     return r;
 }
 
 json error_against(const std::vector<std::string>& reference_dirs, const std::string& name,
                    const LayerSet& test, const std::vector<uint8_t>& shadowed) {
-    const ReferenceLightmap ref_files = read_reference(reference_dirs, name);
-    const ExrFile& ref = ref_files.a;
-    const LayerSet* half = ref_files.halves ? &ref_files.b.layers : nullptr;
+    const ReferenceLightmap ref = read_reference(reference_dirs, name);
+    const LayerSet* half = ref.half ? &*ref.half : nullptr;
     json out = json::object();
     for (const char* layer : {"lm_irradiance", "lm_total", "lm_surface", "lm_inscatter_single",
                               "lm_inscatter_multiple"}) {
@@ -124,17 +119,7 @@ json error_against(const std::vector<std::string>& reference_dirs, const std::st
         }
     }
     if (ref.layers.find("lm_inscatter_single") && test.find("lm_inscatter_single")) {
-        LayerSet mean = ref.layers;
-        if (half)
-            for (const char* layer :
-                 {"lm_irradiance", "lm_inscatter_single", "lm_inscatter_multiple"})
-                if (mean.find(layer) && half->find(layer)) {
-                    std::vector<float>& m = mean.find(layer)->data;
-                    const std::vector<float>& h = half->find(layer)->data;
-                    for (size_t k = 0; k < m.size() && k < h.size(); ++k)
-                        m[k] = 0.5f * (m[k] + h[k]);
-                }
-        const RegionComparison c = compare_region(test, mean, shadowed);
+        const RegionComparison c = compare_region(test, ref.mean, shadowed);
         out["shadowed"] = {{"texels", c.texels},
                            {"lm_irradiance_relmse", c.irradiance_relmse},
                            {"lm_irradiance_mean", c.test_irradiance},
