@@ -226,17 +226,17 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
 long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& m, int paths,
                                      PackedMap& packed) {
     const size_t n = map.texels.size();
-    // Per texel: the emitters' RGB, the surface light's RGB, the corrections' ratio to the
-    // tables' single scattering of the unoccluded connections, then (not stored) the lifted
-    // centre, the lift and whether geometry crosses the footprint, dilated alike.
-    constexpr size_t kChannels = 14, kCentre = 9, kLift = 12, kStraddles = 13;
+    // Per valid texel: the emitters' RGB, the surface light's RGB, the corrections' ratio to
+    // the tables' single scattering of the unoccluded connections. Only valid texels are read:
+    // a hit whose nearest texel is the ring outside a chart, or inside geometry, keeps its
+    // tables as an object without a lightmap does. (The ring dilated from its neighbours held
+    // for any hit: valley's hits in the closed cavities of layered IFC walls read lit walls'
+    // values there, 10 % of the bake's lm_irradiance relMSE.)
+    constexpr size_t kChannels = 9;
     std::vector<float> v(n * kChannels, 0.0f);
+    std::vector<char> readable(n, 0);
     for (size_t i = 0; i < n; ++i) {
         if (map.texels[i].state != TexelState::Valid) continue;
-        const vec3 centre = lifted_centre(map, i);
-        for (int c = 0; c < 3; ++c) v[i * kChannels + kCentre + size_t(c)] = centre[c];
-        v[i * kChannels + kLift] = straddle_lift(map, i);
-        v[i * kChannels + kStraddles] = m.straddles[i] ? 1.0f : 0.0f;
         const vec3 emitters = (m.deferred[i].single + m.deferred[i].multiple) / float(paths);
         const vec3 surface = m.deferred[i].surface / float(paths);
         vec3 ratio(0.0f);
@@ -246,14 +246,13 @@ long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& 
         if (!std::isfinite(emitters.x + emitters.y + emitters.z + surface.x + surface.y +
                            surface.z + ratio.x + ratio.y + ratio.z))
             continue;
+        readable[i] = 1;
         for (int c = 0; c < 3; ++c) {
             v[i * kChannels + size_t(c)] = emitters[c];
             v[i * kChannels + 3 + size_t(c)] = surface[c];
             v[i * kChannels + 6 + size_t(c)] = ratio[c];
         }
     }
-    // Lookups near a chart's edge may land on the ring outside it.
-    const std::vector<TexelState> states = dilate(map, v, int(kChannels), 2);
     packed.width = map.width;
     packed.height = map.height;
     for (size_t i = 0; i < n; ++i) {
@@ -268,23 +267,22 @@ long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& 
     packed.straddles.assign((n + 63) / 64, {});
     long straddling = 0;
     for (size_t i = 0; i < n; ++i) {
+        if (!readable[i]) continue;
+        packed.straddles[i / 64].readable |= uint64_t(1) << (i % 64);
         uint16_t* h = &packed.halves[i * kHalvesPerTexel];
-        for (size_t c = 0; c < 9; ++c)
+        for (size_t c = 0; c < kChannels; ++c)
             h[c] = glm::packHalf1x16(v[i * kChannels + c] * (c < 6 ? inv : inv_ratio));
-        // The shadows of the texel's point and directional lights, where known (valid texels
-        // under exact tracking; dilated ones hold for any hit).
-        const bool gate = states[i] == TexelState::Valid && m.gated[i];
+        // The shadows of the texel's point and directional lights, where known (exact
+        // tracking).
         for (int w16 = 0; w16 < 4; ++w16)
-            h[9 + w16] = gate ? uint16_t(m.guide.shadows[i] >> (16 * w16)) : 0;
-        h[13] = gate ? 1 : 0;
-        const bool filled = states[i] == TexelState::Valid || states[i] == TexelState::Dilated;
-        if (filled && v[i * kChannels + kStraddles] > 0.0f) {
-            const float* e = &v[i * kChannels + kCentre];
+            h[9 + w16] = m.gated[i] ? uint16_t(m.guide.shadows[i] >> (16 * w16)) : 0;
+        h[13] = m.gated[i] ? 1 : 0;
+        if (m.straddles[i]) {
             packed.straddles[i / 64].bits |= uint64_t(1) << (i % 64);
-            const bool mixed = states[i] == TexelState::Valid && m.cover[i].mixed;
-            packed.centres.push_back(
-                {uint32_t(i), vec3(e[0], e[1], e[2]), e[3], mixed, mixed && m.cover[i].centre});
-            straddling += states[i] == TexelState::Valid;
+            const bool mixed = m.cover[i].mixed;
+            packed.centres.push_back({uint32_t(i), lifted_centre(map, i), straddle_lift(map, i),
+                                      mixed, mixed && m.cover[i].centre});
+            ++straddling;
         }
     }
     uint32_t before = 0;
@@ -353,7 +351,7 @@ VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit
     const std::vector<TriangleToTexels>& tris = triangles_[size_t(mi)];
     if (hit.primitive < 0 || size_t(hit.primitive) >= tris.size()) return texel;
     const vec2 uv = tris[size_t(hit.primitive)].uv(hit.position);
-    // The nearest texel (dilated past the chart's edge): one cache line, where a bilinear
+    // The nearest texel (a valid one, or no field): one cache line, where a bilinear
     // read of four cost 5 % of a smoke_room bake; the field is a noisy, unfiltered estimate
     // that deeper vertices integrate over what they see, so its interpolation buys nothing.
     const PackedMap& map = packed_[size_t(mi)];
@@ -363,6 +361,7 @@ VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit
     // Geometry crosses this texel: its value holds for the side its centre is on (one ray, two
     // where a cover close above is checked; valley at low quality: 10.3 M of 12.8 M lookups).
     const PackedMap::StraddleWord& word = map.straddles[k / 64];
+    if (!(word.readable >> (k % 64) & 1)) return texel;
     if (word.bits >> (k % 64) & 1) {
         const uint64_t below = word.bits & ((uint64_t(1) << (k % 64)) - 1);
         const StraddlingTexel* it = &map.centres[word.before + size_t(__builtin_popcountll(below))];
