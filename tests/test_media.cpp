@@ -48,6 +48,62 @@ TEST(Media, HomogeneousBoundsGiveClosedFormTransmittance) {
     EXPECT_NEAR(s.effective().sigma_s, (0.5 * 2 + 0.2 * 4) / 10.0, 1e-9);
 }
 
+// Many boxes (valley: air and ten smoke volumes) are rejected by a segment's bounds, a ray to
+// infinity's ending where it leaves their union, before their slab tests: the answers must be
+// those of each medium alone, exactly, for rays that start inside, outside, graze and miss.
+TEST(Media, BoxesRejectedBySegmentBoundsChangeNothing) {
+    const std::string json = R"([
+        {"sigma_s": 0.05, "sigma_a": 0.01, "bounds": {"box": {"min": [-10,-10,-2], "max": [10,10,6]}}},
+        {"sigma_s": 0.8, "bounds": {"box": {"min": [-6,-6,1], "max": [-3,-3,4]}}},
+        {"sigma_s": 0.6, "sigma_a": 0.1, "bounds": {"box": {"min": [3,-6,1], "max": [6,-3,4]}}},
+        {"sigma_s": 0.4, "bounds": {"sphere": {"center": [0,5,2], "radius": 1.5}}}])";
+    const std::vector<MediumDesc> descs = media_from(json);
+    const Media all(descs);
+    std::vector<Media> alone;
+    for (const MediumDesc& d : descs) alone.emplace_back(std::vector<MediumDesc>{d});
+    const double inf = std::numeric_limits<double>::infinity();
+    uint64_t h = 12345;
+    auto next = [&] {
+        h = h * 6364136223846793005ULL + 1442695040888963407ULL;
+        return float(h >> 40) * (1.0f / float(1 << 24));
+    };
+    int crossing = 0, missing = 0;
+    for (int i = 0; i < 2000; ++i) {
+        const vec3 o =
+            vec3(-14.0f, -14.0f, -4.0f) + vec3(28.0f, 28.0f, 14.0f) * vec3(next(), next(), next());
+        const vec3 d = glm::normalize(vec3(next() - 0.5f, next() - 0.5f, next() - 0.5f));
+        for (const double t_max : {double(next()) * 12.0, inf}) {
+            double tau_s = 0.0, exit = 0.0;
+            for (const Media& m : alone) {
+                tau_s += m.integrate(o, d, t_max).tau_s;
+                exit = std::max(exit, m.exit_distance(o, d));
+            }
+            const SegmentOptics s = all.integrate(o, d, t_max);
+            // Sums in another order: equal to the last bits.
+            EXPECT_NEAR(s.tau_s, tau_s, 1e-12 * (1.0 + tau_s)) << i;
+            EXPECT_EQ(all.exit_distance(o, d), exit) << i;
+            if (!std::isfinite(t_max)) EXPECT_EQ(s.length, exit) << i;
+            (tau_s > 0.0 ? crossing : missing)++;
+            // Free flights: the same collision from the same random numbers as with no
+            // rejection (each medium alone draws its own uniform first, as the mixture does).
+            CounterRng a(1, 2, uint64_t(i), 0), b(1, 2, uint64_t(i), 0);
+            const MediumCollision c = all.sample_collision(o, d, t_max, a);
+            MediumCollision best;
+            best.t = t_max;
+            for (const Media& m : alone) {
+                CounterRng one = b;
+                const MediumCollision ci = m.sample_collision(o, d, std::min(t_max, best.t), one);
+                b.next_double();
+                if (ci.happened && ci.t < best.t) best = ci;
+            }
+            EXPECT_EQ(c.happened, best.happened) << i;
+            if (c.happened) EXPECT_EQ(c.t, best.t) << i;
+        }
+    }
+    EXPECT_GT(crossing, 1000);
+    EXPECT_GT(missing, 300);
+}
+
 // A medium without bounds whose coefficients were dragged to 0 adds nothing to a segment to
 // infinity (a directional light's): 0 x inf is 0 here, not NaN (it made every path of such a
 // bake non-finite, the lightmap black).

@@ -319,6 +319,25 @@ Media::Media(const std::vector<MediumDesc>& descs, const std::string& scene_file
                            e.grid->box_max() == e.desc.box_max;
         media_.push_back(std::move(e));
     }
+    // The union of the media's bounds, where all are boxes or spheres.
+    bounded_ = !media_.empty();
+    union_min_ = vec3(std::numeric_limits<float>::max());
+    union_max_ = vec3(-std::numeric_limits<float>::max());
+    for (const Entry& e : media_) {
+        vec3 lo, hi;
+        if (e.desc.bounds == MediumBounds::Box) {
+            lo = e.desc.box_min;
+            hi = e.desc.box_max;
+        } else if (e.desc.bounds == MediumBounds::Sphere) {
+            lo = e.desc.center - vec3(e.desc.radius);
+            hi = e.desc.center + vec3(e.desc.radius);
+        } else {
+            bounded_ = false;
+            break;
+        }
+        union_min_ = glm::min(union_min_, lo);
+        union_max_ = glm::max(union_max_, hi);
+    }
 }
 
 void Media::set_coefficients(size_t i, double sigma_s, double sigma_a, double g, double scale) {
@@ -394,26 +413,46 @@ void add_medium(const MediumDesc& m, double density_length, SegmentOptics& s) {
 
 }  // namespace
 
+Media::SegmentBox Media::segment_box(const vec3& o, const vec3& d, double t_max) const {
+    SegmentBox b;
+    if (media_.size() < 2) return b;
+    double t_end = t_max;
+    if (!std::isfinite(t_max)) {
+        // A ray to infinity crosses media only inside their union: it ends where it leaves it.
+        if (!bounded_) return b;
+        double t0 = 0.0, t1 = t_max;
+        b.active = true;
+        if (!clip_to_box(union_min_, union_max_, o, d, &t0, &t1)) {
+            b.misses_all = true;
+            return b;
+        }
+        t_end = t1;
+    }
+    const vec3 end = o + d * float(t_end);
+    // Padded by the float rounding of `end` (the slab tests run in double).
+    const vec3 ao = glm::abs(o);
+    const float pad = 1e-5f * (std::max({ao.x, ao.y, ao.z}) + float(t_end) + 1.0f);
+    b.active = true;
+    b.lo = glm::min(o, end) - pad;
+    b.hi = glm::max(o, end) + pad;
+    return b;
+}
+
+bool Media::SegmentBox::misses(const MediumDesc& desc) const {
+    if (!active) return false;
+    if (misses_all) return true;
+    return desc.bounds == MediumBounds::Box && (glm::any(glm::lessThan(hi, desc.box_min)) ||
+                                                glm::any(glm::greaterThan(lo, desc.box_max)));
+}
+
 SegmentOptics Media::integrate(const vec3& o, const vec3& d, double t_max) const {
     SegmentOptics s;
     double exit = 0.0;
-    // A finite segment's bounds first: most of a scene's boxes (valley's ten smoke volumes)
-    // lie off a segment, and six comparisons reject them before the slab test's divisions.
-    const bool bounded = media_.size() > 1 && std::isfinite(t_max);
-    vec3 lo(0.0f), hi(0.0f);
-    if (bounded) {
-        const vec3 end = o + d * float(t_max);
-        // Padded by the float rounding of `end` (the slab test runs in double).
-        const vec3 ao = glm::abs(o);
-        const float pad = 1e-5f * (std::max({ao.x, ao.y, ao.z}) + float(t_max) + 1.0f);
-        lo = glm::min(o, end) - pad;
-        hi = glm::max(o, end) + pad;
-    }
+    // The segment's bounds first: most of a scene's boxes (valley's ten smoke volumes) lie off
+    // a segment, and six comparisons reject them before the slab test's divisions.
+    const SegmentBox box = segment_box(o, d, t_max);
     for (const Entry& e : media_) {
-        if (bounded && e.desc.bounds == MediumBounds::Box &&
-            (glm::any(glm::lessThan(hi, e.desc.box_min)) ||
-             glm::any(glm::greaterThan(lo, e.desc.box_max))))
-            continue;
+        if (box.misses(e.desc)) continue;
         double t0, t1;
         if (!clip(e, o, d, t_max, &t0, &t1)) continue;
         exit = std::max(exit, t1);
@@ -499,9 +538,11 @@ MediumCollision Media::sample_collision(const vec3& o, const vec3& d, double t_m
                                         CounterRng& rng) const {
     MediumCollision best;
     best.t = t_max;
+    const SegmentBox box = segment_box(o, d, t_max);
     for (const Entry& e : media_) {
         // One uniform per medium whether or not it is crossed: the stream stays aligned.
         const double target = -std::log1p(-rng.next_double());
+        if (box.misses(e.desc)) continue;
         double t0, t1;
         MediumCollision c;
         if (clip(e, o, d, std::min(t_max, best.t), &t0, &t1) &&
@@ -541,10 +582,12 @@ MediumCollision Media::sample_forced_collision(const vec3& o, const vec3& d, dou
 
 double Media::exit_distance(const vec3& o, const vec3& d) const {
     double exit = 0.0;
+    const SegmentBox box = segment_box(o, d, std::numeric_limits<double>::infinity());
     for (const Entry& e : media_) {
         double t0, t1;
         if (e.desc.bounds == MediumBounds::Everywhere)
             return std::numeric_limits<double>::infinity();
+        if (box.misses(e.desc)) continue;
         if (clip(e, o, d, std::numeric_limits<double>::infinity(), &t0, &t1))
             exit = std::max(exit, t1);
     }

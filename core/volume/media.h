@@ -164,7 +164,19 @@ class Media {
                  MediumCollision* out) const;
     bool clip(const Entry& e, const vec3& o, const vec3& d, double t_max, double* t0,
               double* t1) const;
+    // A segment's axis-aligned bounds, to reject the boxes it cannot cross before their slab
+    // tests (valley: 11 media on every segment). A ray to infinity ends where it leaves the
+    // media's union (misses_all: it never enters it). Inactive: nothing is rejected.
+    struct SegmentBox {
+        bool active = false, misses_all = false;
+        vec3 lo{0.0f}, hi{0.0f};
+        bool misses(const MediumDesc& desc) const;
+    };
+    SegmentBox segment_box(const vec3& o, const vec3& d, double t_max) const;
     std::vector<Entry> media_;
+    // The union of the media's bounds (bounded_: all are boxes or spheres).
+    bool bounded_ = false;
+    vec3 union_min_{0.0f}, union_max_{0.0f};
     uint64_t version_ = 0;
 };
 
