@@ -295,41 +295,86 @@ TEST(Media, FreeFlightsFollowTheTransmittanceLaw) {
     }
 }
 
-TEST(Media, ForcedCollisionsAreTheConditionedLawWeightedByItsProbability) {
-    // E[weight 1(t < s); found] must be 1 - T(s) for every s <= t_max, through the same grid
-    // and global medium; thin (0.6 across: a third of free flights collide) so that some of
-    // the 4 tries fail. Mean of 40000 weighted indicators at 4.5 sigma (their sample sd).
-    const Media m(media_from(R"([
-        {"sigma_s": 0.3, "sigma_a": 0.1, "bounds": {"box": {"min": [0,-1,-1], "max": [2,1,1]}},
-         "density": {"source": "brushes", "resolution": [16, 8, 8],
-                     "brushes": [{"shape": "ellipsoid", "center": [1,0,0], "size": [1.6,1.6,1.6]}]}},
-        {"sigma_s": 0.02, "sigma_a": 0.01}])"));
+// Several media (a grid inside a global medium, and a homogeneous box overlapping both): the
+// conditioned law is inverted through their summed thickness, so every draw collides, with
+// weight P; P(t < s | collision) = (1 - T(s)) / P, and the medium collided with is each one
+// with probability (integral of sigma_t,m T) / P (midpoint quadrature, 40000 steps; each
+// medium's sigma from a Media of it alone). Binomial, 4.5 sigma.
+TEST(Media, ForcedCollisionsThroughSeveralMediaInvertTheConditionedLaw) {
+    const std::string grid = R"({"sigma_s": 0.3, "sigma_a": 0.1, "g": 0.5,
+        "bounds": {"box": {"min": [0,-1,-1], "max": [2,1,1]}},
+        "density": {"source": "brushes", "resolution": [16, 8, 8],
+                    "brushes": [{"shape": "ellipsoid", "center": [1,0,0], "size": [1.6,1.6,1.6]}]}})";
+    const std::string global = R"({"sigma_s": 0.02, "sigma_a": 0.01, "g": 0.1})";
+    const std::string box = R"({"sigma_s": 0.2, "sigma_a": 0.05, "g": -0.3,
+        "bounds": {"box": {"min": [1.5,-1,-1], "max": [2.6,1,1]}}})";
+    const Media m(media_from("[" + grid + "," + global + "," + box + "]"));
+    const Media alone[3] = {Media(media_from("[" + grid + "]")),
+                            Media(media_from("[" + global + "]")),
+                            Media(media_from("[" + box + "]"))};
+    const double g_of[3] = {0.5, 0.1, -0.3};
     const vec3 o(-0.5f, 0.05f, 0.02f), d(1, 0, 0);
-    const double t_max = 3.0;
+    const double t_max = 3.0, p = 1.0 - m.transmittance(o, d, t_max);
+    double medium_share[3] = {};
+    const int steps = 40000;
+    for (int k = 0; k < steps; ++k) {
+        const double t = (k + 0.5) * t_max / steps;
+        const double T = m.transmittance(o, d, t);
+        for (int i = 0; i < 3; ++i)
+            medium_share[i] += alone[i].at(o + d * float(t)).sigma_t() * T * t_max / steps / p;
+    }
     const int n = 40000;
-    std::vector<std::pair<double, double>> found;  // (t, weight)
-    int missed = 0;
+    std::vector<double> ts;
+    int picked[3] = {};
     for (int i = 0; i < n; ++i) {
         CounterRng rng(11, 0, uint64_t(i), 0);
         double weight = -1.0;
-        const MediumCollision c = m.sample_forced_collision(o, d, t_max, rng, 4, &weight);
-        if (!c.happened) {
-            EXPECT_EQ(weight, 0.0);
-            ++missed;
-            continue;
-        }
+        const MediumCollision c = m.sample_forced_collision(o, d, t_max, rng, &weight);
+        ASSERT_TRUE(c.happened) << i;
+        ASSERT_EQ(weight, p);
         ASSERT_LT(c.t, t_max);
-        found.emplace_back(c.t, weight);
+        ts.push_back(c.t);
+        const int which = int(std::find(g_of, g_of + 3, c.g) - g_of);
+        ASSERT_LT(which, 3) << c.g;
+        ++picked[which];
+        // The coefficients are that medium's at the point.
+        const HomogeneousMedium at = alone[which].at(o + d * float(c.t));
+        ASSERT_NEAR(c.sigma_t, at.sigma_t(), 1e-6 * at.sigma_t() + 1e-9) << c.t;
+        ASSERT_NEAR(c.sigma_s, at.sigma_s, 1e-6 * at.sigma_s + 1e-9) << c.t;
     }
-    EXPECT_GT(missed, 0);  // the weight's 1 / Q is exercised
-    for (double s : {0.4, 0.8, 1.2, 1.6, 2.2, 3.0}) {
-        double sum = 0.0, sum2 = 0.0;
-        for (const auto& [t, w] : found) {
-            const double v = t < s ? w : 0.0;
-            sum += v, sum2 += v * v;
-        }
-        const double mean = sum / n, sd = std::sqrt(std::max(0.0, sum2 / n - mean * mean) / n);
-        EXPECT_NEAR(mean, 1.0 - m.transmittance(o, d, s), 4.5 * sd + 1e-9) << "s = " << s;
+    for (double s : {0.2, 0.6, 1.0, 1.4, 1.7, 2.2, 2.8}) {
+        const double expected = (1.0 - m.transmittance(o, d, s)) / p;
+        const double share =
+            double(std::count_if(ts.begin(), ts.end(), [&](double t) { return t < s; })) / n;
+        EXPECT_NEAR(share, expected, 4.5 * std::sqrt(expected * (1.0 - expected) / n) + 1e-9)
+            << "s = " << s;
+    }
+    for (int i = 0; i < 3; ++i) {
+        const double e = medium_share[i];
+        EXPECT_NEAR(double(picked[i]) / n, e, 4.5 * std::sqrt(e * (1.0 - e) / n) + 1e-4)
+            << "medium " << i;
+    }
+}
+
+// A thin gap (valley's floors 0.03 above the terrain, in thin air among other media): P is
+// ~2e-4, and every draw still collides with weight P, not one draw in a thousand with
+// ~1 / tries of it (the first version's analog retries).
+TEST(Media, ForcedCollisionsInAThinGapAlwaysCollideWithWeightP) {
+    const Media m(media_from(R"([
+        {"sigma_s": 0.006, "sigma_a": 0.001, "bounds": {"box": {"min": [-100,-100,-5], "max": [100,100,40]}}},
+        {"sigma_s": 0.8, "sigma_a": 0.08, "bounds": {"box": {"min": [4,4,4], "max": [8,8,8]}}}])"));
+    const vec3 o(0.0f, 0.0f, 0.0f), d = glm::normalize(vec3(0.3f, 0.1f, 1.0f));
+    const double t_max = 0.03, p = 1.0 - m.transmittance(o, d, t_max);
+    ASSERT_NEAR(p, 0.007 * 0.03, 1e-6);
+    for (int i = 0; i < 1000; ++i) {
+        CounterRng rng(5, 0, uint64_t(i), 0);
+        double weight = -1.0;
+        const MediumCollision c = m.sample_forced_collision(o, d, t_max, rng, &weight);
+        ASSERT_TRUE(c.happened) << i;
+        ASSERT_EQ(weight, p);
+        ASSERT_GE(c.t, 0.0);
+        ASSERT_LT(c.t, t_max);
+        ASSERT_NEAR(c.sigma_t, 0.007, 1e-12);
     }
 }
 
@@ -348,7 +393,7 @@ TEST(Media, ForcedCollisionsInOneMediumInvertTheConditionedLaw) {
     for (int i = 0; i < n; ++i) {
         CounterRng rng(12, 0, uint64_t(i), 0);
         double weight = -1.0;
-        const MediumCollision c = m.sample_forced_collision(o, d, t_max, rng, 4, &weight);
+        const MediumCollision c = m.sample_forced_collision(o, d, t_max, rng, &weight);
         ASSERT_TRUE(c.happened) << i;
         ASSERT_EQ(weight, p);
         ASSERT_LT(c.t, t_max);

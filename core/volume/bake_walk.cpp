@@ -8,7 +8,6 @@
 // | parameter            | meaning                                                        |
 // |----------------------|----------------------------------------------------------------|
 // | near_light_fraction  | bake.near_light_fraction: directions aimed past a point light  |
-// | kForcedCollisionTries| 8: draws of a texel walk's forced first collision              |
 #include <cmath>
 #include <limits>
 
@@ -21,8 +20,6 @@ namespace freqlab {
 namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
-// Draws a texel walk's forced first collision tries (Media::sample_forced_collision).
-constexpr int kForcedCollisionTries = 8;
 
 }  // namespace
 
@@ -176,9 +173,7 @@ IrradianceParts BakeEstimator::walk(vec3 pos, vec3 dir, vec3 throughput, Counter
             // From the texel, light that reaches it unscattered is not the walk's: every walk
             // is made to scatter on its first segment (weighted by the chance it would).
             double forced = 0.0;
-            if (!media_.empty())
-                c = media_.sample_forced_collision(pos, dir, t_max, rng, kForcedCollisionTries,
-                                                   &forced);
+            if (!media_.empty()) c = media_.sample_forced_collision(pos, dir, t_max, rng, &forced);
             if (!c.happened) break;
             throughput *= float(forced);
         } else if (!media_.empty()) {

@@ -135,12 +135,11 @@ class Media {
                                      CounterRng& rng) const;
     // A collision before t_max given that one happens (a forced collision), weighted so that
     // E[weight f(t); found] = P E[f(t) | collision], P = 1 - T(t_max) the probability of a
-    // collision. One medium: the conditioned law inverted (T(t) = 1 - u P), weight P. Several:
-    // up to `tries` draws of sample_collision, the first that collides kept, weight P / Q
-    // with Q = 1 - (1 - P)^tries the probability of finding one. Not found (or no medium):
+    // collision: the conditioned law inverted through all the media crossed (T(t) = 1 - u P,
+    // media_collisions.cpp), weight P. Not found (no medium, or rounding short of the target):
     // happened = false, *weight = 0.
     MediumCollision sample_forced_collision(const vec3& o, const vec3& d, double t_max,
-                                            CounterRng& rng, int tries, double* weight) const;
+                                            CounterRng& rng, double* weight) const;
     // Where the ray leaves the last bounded medium it crosses; infinity when a medium fills
     // all space and the ray is not leaving anything (directional lights' query depth).
     double exit_distance(const vec3& o, const vec3& d) const;
@@ -164,6 +163,13 @@ class Media {
                  MediumCollision* out) const;
     bool clip(const Entry& e, const vec3& o, const vec3& d, double t_max, double* t0,
               double* t1) const;
+    // Medium e's optical thickness over [t0, t1] (inside its bounds).
+    double thickness(const Entry& e, const vec3& o, const vec3& d, double t0, double t1) const;
+    // Where in [a, b] the summed thickness of `active` (all of which cover [a, b]) from a
+    // reaches target, and which of them collides there (u_pick by their sigma_t).
+    MediumCollision collide_mixture(const std::vector<const Entry*>& active, const vec3& o,
+                                    const vec3& d, double a, double b, double target,
+                                    double u_pick) const;
     // A segment's axis-aligned bounds, to reject the boxes it cannot cross before their slab
     // tests (valley: 11 media on every segment). A ray to infinity ends where it leaves the
     // media's union (misses_all: it never enters it). Inactive: nothing is rejected.
