@@ -225,11 +225,18 @@ void print_debug_texel(const RayScene& rays, const Media& media, const ImpulseTa
                 "unoccluded connections\n",
                 "", emitters, luminance(here.value(true)), luminance(here.single_ratio()));
         }
+        TexelFilterUse filter;
         const IrradianceParts mean =
             texel_estimate(estimator, baker.lightmaps(), lightmap_index, size_t(y) * map->width + x,
-                           settings.seed, settings.spp);
+                           settings.seed, settings.spp, &filter);
         std::printf("  %-10s %31.6g %11.6g %11.6g %11.6g\n", to_string(m), luminance(mean.surface),
                     luminance(mean.single), luminance(mean.multiple), luminance(mean.total()));
+        if (m == BakeMethod::Impulse && texel_filter_radius(estimator) > 0)
+            std::printf(
+                "  %-10s its Monte Carlo terms ran at rate %g (weight %g) and the filter averaged "
+                "%d texel(s) within %d of it\n",
+                "", double(filter.mc_rate), 1.0 / double(filter.mc_rate), filter.texels,
+                texel_filter_radius(estimator));
     }
     // The baked method's record of the texel's first path (what the workbench's trace shows).
     CounterRng rng = texel_random(settings.seed, lightmap_index, size_t(y) * map->width + x, 0);

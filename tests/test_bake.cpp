@@ -525,20 +525,31 @@ TEST(Bake, ImpulseTexelEstimateIsTheFilteredBakedTexel) {
     own.texel_mc_radius = 0;
     BakeEstimator unfiltered(*f.rays, f.media, &tables, BakeMethod::Impulse, own);
     unfiltered.set_vertex_corrections(baker.vertex_corrections());
-    int checked = 0, differs_unfiltered = 0;
+    // What --debug-texel reports beside it: the texel's own rate and its filter's window.
+    const std::vector<float> rates = texel_mc_rates(floor, estimator);
+    int checked = 0, differs_unfiltered = 0, averaged = 0;
     for (size_t i = 0; i < floor.texels.size() && checked < 30; i += 5) {
         if (floor.texels[i].state != TexelState::Valid) continue;
         ++checked;
         const float baked = stored.data[i * 3];
+        TexelFilterUse use, use_alone;
         const float mine =
-            texel_estimate(estimator, baker.lightmaps(), 0, i, s.seed, s.spp).total().x;
+            texel_estimate(estimator, baker.lightmaps(), 0, i, s.seed, s.spp, &use).total().x;
         EXPECT_NEAR(mine, baked, 1e-5f * std::max(1.0f, baked)) << "texel " << i;
+        EXPECT_EQ(use.mc_rate, rates[i]) << "texel " << i;
+        EXPECT_GE(use.texels, 1);
+        EXPECT_LE(use.texels, 25);
+        averaged += use.texels > 1;
         const float alone =
-            texel_estimate(unfiltered, baker.lightmaps(), 0, i, s.seed, s.spp).total().x;
+            texel_estimate(unfiltered, baker.lightmaps(), 0, i, s.seed, s.spp, &use_alone)
+                .total()
+                .x;
+        EXPECT_EQ(use_alone.texels, 1);
         if (std::abs(alone - baked) > 1e-3f * std::max(1.0f, baked)) ++differs_unfiltered;
     }
     EXPECT_GE(checked, 20);
     EXPECT_GT(differs_unfiltered, checked / 2);
+    EXPECT_GT(averaged, checked / 2);
 }
 
 // The filter of the deferred terms: a constant field stays constant (a box filter of the

@@ -356,7 +356,7 @@ nlohmann::json LightmapBaker::probes_json() const {
 
 IrradianceParts texel_estimate(const BakeEstimator& estimator,
                                const std::vector<ObjectLightmap>& maps, size_t lightmap,
-                               size_t texel, int seed, int spp) {
+                               size_t texel, int seed, int spp, TexelFilterUse* filter) {
     const ObjectLightmap& map = maps.at(lightmap);
     const size_t n = map.texels.size();
     const int radius = texel_filter_radius(estimator);
@@ -389,6 +389,7 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
     const std::vector<size_t> near =
         filtered ? texel_filter_neighbours(map, guide, texel, radius) : std::vector<size_t>{texel};
     sum += filtered_texel_terms(deferred, files ? &single : nullptr, texel, near);
+    if (filter) *filter = {rates[texel], int(near.size())};
     const float inv = spp > 0 ? 1.0f / float(spp) : 0.0f;
     sum.surface *= inv;
     sum.single *= inv;

@@ -134,10 +134,15 @@ inline CounterRng texel_random(int seed, size_t lightmap, size_t texel, int samp
 // The mean of paths 0 .. spp-1 of `estimator` at texel `texel` of lightmap `lightmap` (of `maps`)
 // under the bake's keys: what a bake with that estimator and seed stores there (up to the order
 // of the additions), impulse's deferred terms filtered over the same neighbours (re-run here).
-// --debug-texel prints it for every method.
+// --debug-texel prints it for every method, with `filter` when given: the texel's Monte Carlo
+// rate (texel_mc_rates) and how many texels its filter averaged (itself included).
+struct TexelFilterUse {
+    float mc_rate = 0.0f;
+    int texels = 0;
+};
 IrradianceParts texel_estimate(const BakeEstimator& estimator,
                                const std::vector<ObjectLightmap>& maps, size_t lightmap,
-                               size_t texel, int seed, int spp);
+                               size_t texel, int seed, int spp, TexelFilterUse* filter = nullptr);
 
 // The scene's lightmap name for file output: "<object name>" or "object<i>".
 std::string lightmap_name(const Scene& scene, const ObjectLightmap& map);
