@@ -604,6 +604,43 @@ TEST(Bake, TexelFilterAveragesOnlyTheTexelsOwnSurfaceAndShadowSide) {
     }
 }
 
+// The light-level test reads the sums as estimates: a sum of 16 paths of which one caught 1.0
+// (variance 1 - 1/16) agrees with a dark neighbour's 0, a sum of 16 paths of 0.0625 each (no
+// variance) does not, nor does one path alone (no variance known), nor a noisy sum whose
+// scattered light differs (it sees lit medium the dark texel does not); within the ratio they
+// agree whatever the variance.
+TEST(Bake, TexelFilterLightTestAllowsForTheSumsNoise) {
+    BakeEstimator::FixedDirect none;
+    const auto light_of = [](float v) {
+        IrradianceParts p;
+        p.surface = vec3(v);
+        return p;
+    };
+    TexelFilterGuide guide = TexelFilterGuide::sized(6);
+    set_texel_filter_guide(guide, 0, none, light_of(0.0f), 0.0f, 16);
+    set_texel_filter_guide(guide, 1, none, light_of(1.0f), 1.0f, 16);  // one path of 1
+    set_texel_filter_guide(guide, 2, none, light_of(1.0f), 16 * 0.0625f * 0.0625f, 16);
+    set_texel_filter_guide(guide, 3, none, light_of(1.0f), 1.0f, 1);
+    set_texel_filter_guide(guide, 4, none, light_of(1.4f), 0.0f, 16);
+    IrradianceParts seeing_medium = light_of(0.5f);
+    seeing_medium.single = vec3(0.5f);
+    set_texel_filter_guide(guide, 5, none, seeing_medium, 1.0f, 16);
+    EXPECT_NEAR(guide.variance[1], 1.0f - 1.0f / 16.0f, 1e-6f);
+    EXPECT_NEAR(guide.variance[2], 0.0f, 1e-6f);
+    EXPECT_EQ(guide.variance[3], 0.0f);
+    EXPECT_TRUE(texel_lights_agree(guide, 0, 1));
+    EXPECT_TRUE(texel_lights_agree(guide, 1, 0));
+    EXPECT_FALSE(texel_lights_agree(guide, 0, 2));
+    EXPECT_FALSE(texel_lights_agree(guide, 0, 3));
+    EXPECT_TRUE(texel_lights_agree(guide, 2, 4));  // within the ratio
+    EXPECT_TRUE(texel_lights_agree(guide, 0, 0));  // dark texels agree
+    EXPECT_NEAR(guide.variance[5], guide.variance[1], 1e-6f);
+    EXPECT_FALSE(texel_lights_agree(guide, 0, 5));
+    // A guide without variances keeps the ratio alone.
+    TexelFilterGuide plain{guide.shadows, guide.light, {}, {}};
+    EXPECT_FALSE(texel_lights_agree(plain, 0, 1));
+}
+
 // The method names joined by any separator, NULs included: the workbench's bake-method combo is
 // a NUL-separated list (it showed nothing when the list was cut at the first NUL).
 TEST(Bake, MethodListKeepsEverySeparator) {

@@ -111,6 +111,9 @@ void LightmapBaker::reset() {
     sums_.assign(maps_.size(), {});
     for (size_t i = 0; i < maps_.size(); ++i) sums_[i].assign(maps_[i].texels.size(), {});
     deferred_sums_ = sums_;
+    light_squares_.assign(maps_.size(), {});
+    for (size_t i = 0; i < maps_.size(); ++i)
+        light_squares_[i].assign(maps_[i].texels.size(), 0.0f);
     single_sums_.assign(maps_.size(), {});
     if (files_single_corrections(method_, settings_))
         for (size_t i = 0; i < maps_.size(); ++i)
@@ -180,9 +183,12 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
             UnoccludedSingle* files = single_sums_[mi].empty() ? nullptr : &single;
             for (int s = first; s < first + samples; ++s) {
                 CounterRng rng = texel_random(settings_.seed, mi, i, s);
-                sums_[mi][i] +=
+                const IrradianceParts e =
                     estimator_.estimate(t.position, t.normal, t.albedo, rng, counters,
                                         &fixed_[mi][i], &deferred_sums_[mi][i], rates[i], files);
+                sums_[mi][i] += e;
+                const float light = luminance(e.total());
+                light_squares_[mi][i] += light * light;
             }
             if (files) single_sums_[mi][i] += single;
         }
@@ -235,6 +241,7 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
                  maps_[m].triangle_uv.size() * sizeof(vec2) +
                  (sums_[m].size() + deferred_sums_[m].size()) * sizeof(IrradianceParts) +
                  single_sums_[m].size() * sizeof(SingleCorrectionSums) +
+                 light_squares_[m].size() * sizeof(float) +
                  fixed_[m].size() * sizeof(BakeEstimator::FixedDirect);
     stats_.storage_mb = double(bytes) / 1e6;
     stats_.peak_rss_mb = peak_rss_megabytes();
@@ -275,6 +282,7 @@ std::string LightmapBaker::encode_share() const {
         [&](size_t mi, size_t at, size_t n) {
             w.put_bytes(&sums_[mi][at], n * sizeof(IrradianceParts));
             w.put_bytes(&deferred_sums_[mi][at], n * sizeof(IrradianceParts));
+            w.put_bytes(&light_squares_[mi][at], n * sizeof(float));
             if (!single_sums_[mi].empty())
                 w.put_bytes(&single_sums_[mi][at], n * sizeof(SingleCorrectionSums));
             TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
@@ -300,6 +308,7 @@ void LightmapBaker::add_share(const std::string& bytes, int index, const std::st
         [&](size_t mi, size_t at, size_t n) {
             r.get_bytes(&sums_[mi][at], n * sizeof(IrradianceParts));
             r.get_bytes(&deferred_sums_[mi][at], n * sizeof(IrradianceParts));
+            r.get_bytes(&light_squares_[mi][at], n * sizeof(float));
             if (!single_sums_[mi].empty())
                 r.get_bytes(&single_sums_[mi][at], n * sizeof(SingleCorrectionSums));
             r.get_bytes(&share_shadows_[mi][at], n * sizeof(uint64_t));
@@ -364,7 +373,7 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
     std::vector<IrradianceParts> sums(n), deferred(n);
     const bool files = files_single_corrections(estimator.method(), estimator.settings());
     std::vector<SingleCorrectionSums> single(files ? n : 0);
-    TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
+    TexelFilterGuide guide = TexelFilterGuide::sized(n);
     const int x0 = int(texel % size_t(map.width)), y0 = int(texel / size_t(map.width));
     const std::vector<float> rates = texel_mc_rates(map, estimator);
     BakeCounters counters;
@@ -375,14 +384,18 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
             if (t.state != TexelState::Valid && j != texel) continue;
             BakeEstimator::FixedDirect fixed;
             UnoccludedSingle unoccluded;
+            float light_squares = 0.0f;
             for (int s = 0; s < spp; ++s) {
                 CounterRng rng = texel_random(seed, lightmap, j, s);
-                sums[j] +=
+                const IrradianceParts e =
                     estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
                                        &deferred[j], rates[j], files ? &unoccluded : nullptr);
+                sums[j] += e;
+                const float light = luminance(e.total());
+                light_squares += light * light;
             }
             if (files) single[j] += unoccluded;
-            set_texel_filter_guide(guide, j, fixed, sums[j]);
+            set_texel_filter_guide(guide, j, fixed, sums[j], light_squares, spp);
         }
     IrradianceParts sum = sums[texel];
     const bool filtered = radius > 0 && map.texels[texel].state == TexelState::Valid;
@@ -404,9 +417,10 @@ LayerSet LightmapBaker::layers(size_t mi) const {
     const float inv = samples_ > 0 ? 1.0f / float(samples_) : 0.0f;
     // Outgoing radiance of each part, and irradiance; dilated together.
     std::vector<float> values(n * 15, 0.0f);
-    TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
+    TexelFilterGuide guide = TexelFilterGuide::sized(n);
     for (size_t i = 0; i < n; ++i) {
-        set_texel_filter_guide(guide, i, fixed_[mi][i], sums_[mi][i]);
+        set_texel_filter_guide(guide, i, fixed_[mi][i], sums_[mi][i], light_squares_[mi][i],
+                               samples_);
         guide.shadows[i] |= share_shadows_[mi][i];
     }
     const std::vector<IrradianceParts> deferred =

@@ -101,6 +101,9 @@ class LightmapBaker {
     // And their single-scattering corrections, filtered as a ratio (texel_filter.h); empty
     // unless files_single_corrections().
     std::vector<std::vector<SingleCorrectionSums>> single_sums_;
+    // Per lightmap, per texel: its paths' total luminance squared, summed (the filter's guide
+    // reads the variance of the texel's light from it: texel_filter.h).
+    std::vector<std::vector<float>> light_squares_;
     // Per lightmap, per texel: the rate of its Monte Carlo terms (texel_filter.h), made by the
     // first pass.
     std::vector<std::vector<float>> mc_rates_;

@@ -34,10 +34,8 @@ std::vector<size_t> texel_filter_neighbours(const ObjectLightmap& map,
     std::vector<size_t> out;
     if (map.texels[i].state != TexelState::Valid) return out;
     for_each_in_window(map, i, radius, [&](size_t j) {
-        const float a = guide.light[i], b = guide.light[j];
         if ((among && !(*among)[j]) || guide.shadows[j] != guide.shadows[i] ||
-            !(std::max(a, b) <= kTexelFilterLightRatio * std::min(a, b)) ||
-            !on_surface_of(map, i, j, radius))
+            !texel_lights_agree(guide, i, j) || !on_surface_of(map, i, j, radius))
             return;
         out.push_back(j);
     });
@@ -67,11 +65,28 @@ std::vector<float> texel_mc_rates(const ObjectLightmap& map, const BakeEstimator
 }
 
 void set_texel_filter_guide(TexelFilterGuide& guide, size_t i,
-                            const BakeEstimator::FixedDirect& fixed, const IrradianceParts& sum) {
+                            const BakeEstimator::FixedDirect& fixed, const IrradianceParts& sum,
+                            float light_squares, int paths) {
     guide.shadows[i] = 0;
     for (const auto& [light, connection] : fixed.occluded)
         guide.shadows[i] |= uint64_t(1) << (unsigned(light) % 64u);
-    guide.light[i] = luminance(sum.total());
+    const float light = luminance(sum.total());
+    guide.light[i] = light;
+    if (!guide.scattered.empty()) guide.scattered[i] = luminance(sum.single + sum.multiple);
+    // The sum of n paths: n times their sample variance, sum x^2 - (sum x)^2 / n.
+    if (!guide.variance.empty())
+        guide.variance[i] =
+            paths > 1 ? std::max(0.0f, light_squares - light * light / float(paths)) : 0.0f;
+}
+
+bool texel_lights_agree(const TexelFilterGuide& guide, size_t i, size_t j) {
+    const float a = guide.light[i], b = guide.light[j];
+    if (std::max(a, b) <= kTexelFilterLightRatio * std::min(a, b)) return true;
+    if (guide.variance.empty() || guide.scattered.empty()) return false;
+    const float sa = guide.scattered[i], sb = guide.scattered[j];
+    if (!(std::max(sa, sb) <= kTexelFilterLightRatio * std::min(sa, sb))) return false;
+    const float spread = guide.variance[i] + guide.variance[j];
+    return std::abs(a - b) <= kTexelFilterLightSigmas * std::sqrt(spread);
 }
 
 int texel_filter_radius(const BakeEstimator& estimator) {

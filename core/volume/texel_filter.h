@@ -9,7 +9,19 @@
 // connection stands in for the tables' response plus a correction), their sum with the
 // unfiltered tables' part does not. Last, the texels' unfiltered light (direct and tables,
 // summed at every path) must agree within kTexelFilterLightRatio: a texel in a crack under a
-// box sees little of the medium that lights its open neighbours. radius 0 keeps every texel's own
+// box sees little of the medium that lights its open neighbours. Those sums are estimates:
+// their difference may also be within kTexelFilterLightSigmas standard deviations of it (each
+// sum's variance from its paths' squared light; a sum of one path has none) when their
+// scattered light (the tables' part, how much lit medium they see) agrees within the ratio.
+// The first version
+// compared the sums alone, and at dark texels one path of 16 catching a lit wall split them:
+// valley's terrain texels in the gaps under houses were filtered over 1-3 texels, where their
+// walks' rare escapes through the gap weighed 1 / texel_mc_rate alone (1.4 and 2.7 where VPT
+// reads 0.004 and 0.0025). Comparing their scattered light instead (the tables' part, not
+// noisy there) joined them, but also joined the closed cavities of layered walls (no light at
+// all) with the rooms beside them (houses' relMSE x3); the noise alone joined dark texels
+// under houses with noisy neighbours that see the lit medium (house10 texels at 0.26 where VPT
+// reads 0). radius 0 keeps every texel's own
 // estimate (unbiased per texel); a radius trades that for (2 radius + 1)^2 times the samples,
 // with the bias of a box blur of a smooth field.
 //
@@ -26,15 +38,26 @@
 namespace freqlab {
 
 constexpr float kTexelFilterLightRatio = 1.5f;
+constexpr float kTexelFilterLightSigmas = 2.0f;
 
 // What the filter compares texels by, one entry per texel.
 struct TexelFilterGuide {
     std::vector<uint64_t> shadows;  // a bit per point / directional light the texel sees occluded
     std::vector<float> light;       // luminance of the texel's unfiltered sum
+    std::vector<float> variance;    // that sum's estimated variance (empty: none known)
+    std::vector<float> scattered;   // luminance of its tables' single and multiple scattering
+    static TexelFilterGuide sized(size_t n) {
+        return {std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f),
+                std::vector<float>(n, 0.0f), std::vector<float>(n, 0.0f)};
+    }
 };
-// Texel i's entry: its occluded fixed lights and the luminance of its unfiltered sum.
+// Texel i's entry: its occluded fixed lights, the luminance of its unfiltered sum of `paths`
+// paths and, from `light_squares` (the sum of their luminances squared), that sum's variance.
 void set_texel_filter_guide(TexelFilterGuide& guide, size_t i,
-                            const BakeEstimator::FixedDirect& fixed, const IrradianceParts& sum);
+                            const BakeEstimator::FixedDirect& fixed, const IrradianceParts& sum,
+                            float light_squares = 0.0f, int paths = 1);
+// Whether texels i and j's unfiltered light agrees (the filter's last test).
+bool texel_lights_agree(const TexelFilterGuide& guide, size_t i, size_t j);
 // The radius the baker filters `estimator`'s deferred terms with (0 unless impulse).
 int texel_filter_radius(const BakeEstimator& estimator);
 struct SingleCorrectionSums;

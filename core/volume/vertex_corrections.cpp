@@ -148,19 +148,24 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
     m.gated.assign(n, 0);
     m.straddles.assign(n, 0);
     m.cover.resize(n);
-    m.guide = TexelFilterGuide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
+    m.guide = TexelFilterGuide::sized(n);
     std::vector<char> done(n, 0);
     auto run = [&](size_t i) {
         const LightmapTexel& t = map.texels[i];
         BakeCounters counters;
         BakeEstimator::FixedDirect fixed;
         IrradianceParts sum;
+        float light_squares = 0.0f;
         for (int s = 0; s < paths_; ++s) {
             CounterRng rng = texel_random(seed, key, i, s);
-            sum += estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
-                                      &m.deferred[i], -1.0f, &m.unoccluded[i]);
+            const IrradianceParts e =
+                estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
+                                   &m.deferred[i], -1.0f, &m.unoccluded[i]);
+            sum += e;
+            const float light = luminance(e.total());
+            light_squares += light * light;
         }
-        set_texel_filter_guide(m.guide, i, fixed, sum);
+        set_texel_filter_guide(m.guide, i, fixed, sum, light_squares, paths_);
         m.gated[i] = fixed.known;  // its lights' shadows known (exact tracking)
         done[i] = 1;
         rays_cast += counters.rays;
