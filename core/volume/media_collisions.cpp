@@ -102,11 +102,18 @@ MediumCollision Media::collide_mixture(const std::vector<const Entry*>& active, 
             for (const Entry* e : active) sum += thickness(*e, o, d, a, s);
             return sum - target;
         };
-        boost::uintmax_t iterations = 64;
-        const std::pair<double, double> root = boost::math::tools::toms748_solve(
-            excess, a, b, -target, excess(b), boost::math::tools::eps_tolerance<double>(48),
-            iterations);
-        t = 0.5 * (root.first + root.second);
+        // The caller found the summed thickness over [a, b] at least target, but the same sum
+        // may round a hair below it: the point is then b (TOMS 748 needs a sign change).
+        const double at_b = excess(b);
+        if (at_b <= 0.0) {
+            t = b;
+        } else {
+            boost::uintmax_t iterations = 64;
+            const std::pair<double, double> root = boost::math::tools::toms748_solve(
+                excess, a, b, -target, at_b, boost::math::tools::eps_tolerance<double>(48),
+                iterations);
+            t = 0.5 * (root.first + root.second);
+        }
     }
     // The medium collided with: in proportion to its sigma_t at the point.
     const vec3 x = o + d * float(t);
