@@ -56,6 +56,27 @@ TEST(Accel, NormalsUseTheInverseTransposeUnderNonUniformScale) {
     EXPECT_GT(h.geometric_normal.z, 0.0f);  // faces the ray that came from above
 }
 
+// Both normals face the ray; back_face says when that flipped the winding's (the sphere's
+// inside, the plane's underside: its normal is +z before the rotation).
+TEST(Accel, BackFaceHitsAreFlagged) {
+    const Scene scene = test_scene();
+    EmbreeDevice device(1);
+    RayScene rs(scene, device);
+    const SurfaceHit outside = rs.intersect(Ray{vec3(0, -5, 2), vec3(0, 1, 0)});
+    const SurfaceHit inside = rs.intersect(Ray{vec3(0, 0, 2), vec3(0, 1, 0)});
+    ASSERT_TRUE(outside.valid && inside.valid);
+    EXPECT_FALSE(outside.back_face);
+    EXPECT_TRUE(inside.back_face);
+    EXPECT_LT(glm::dot(inside.geometric_normal, vec3(0, 1, 0)), 0.0f);
+    const SurfaceHit above = rs.intersect(Ray{vec3(0, 0, 0), vec3(0, 0, -1)});
+    const SurfaceHit below = rs.intersect(Ray{vec3(0, 0, -6), vec3(0, 0, 1)});
+    ASSERT_TRUE(above.valid && below.valid);
+    EXPECT_EQ(below.object, 2);
+    EXPECT_FALSE(above.back_face);
+    EXPECT_TRUE(below.back_face);
+    EXPECT_LT(below.geometric_normal.z, 0.0f);
+}
+
 TEST(Accel, UpdateMovesAnimatedObjects) {
     const Scene scene = test_scene();
     EmbreeDevice device(1);

@@ -807,11 +807,17 @@ TEST(Bake, VertexCorrectionFieldIsReadOnValidTexelsOnly) {
         EXPECT_NE(state_at(inside), TexelState::Valid) << p.x << ", " << p.y;
         EXPECT_FALSE(field->locate(inside).found()) << p.x << ", " << p.y;
     }
-    // Outside, on valid texels: read.
+    // Outside, on valid texels: read from above (the floor's front), not from below (a texel
+    // holds its front's terms; valley's one-sided house walls passed the lit outside's
+    // through).
     for (const vec2 p : {vec2(3.0f, 0.3f), vec2(-2.6f, 2.7f)}) {
         const SurfaceHit outside = floor_hit(f, p.x, p.y, 1.0f);
         EXPECT_EQ(state_at(outside), TexelState::Valid) << p.x << ", " << p.y;
         EXPECT_TRUE(field->locate(outside).found()) << p.x << ", " << p.y;
+        const SurfaceHit below =
+            f.rays->intersect(Ray{vec3(p.x, p.y, -1.0f), vec3(0, 0, 1), 0.0f, 2.0f});
+        ASSERT_TRUE(below.valid && below.object == 0 && below.back_face);
+        EXPECT_FALSE(field->locate(below).found()) << p.x << ", " << p.y;
     }
 }
 

@@ -185,7 +185,8 @@ SurfaceHit RayScene::make_hit(const Ray& ray, float t, unsigned inst, unsigned p
         if (!m.uvs.empty()) h.uv = w * m.uvs[tri.x] + u * m.uvs[tri.y] + v * m.uvs[tri.z];
     }
     // Both normals face the viewer: freqlab's surfaces are two-sided.
-    if (glm::dot(ng, ray.direction) > 0.0f) ng = -ng;
+    h.back_face = glm::dot(ng, ray.direction) > 0.0f;
+    if (h.back_face) ng = -ng;
     if (glm::dot(ns, ng) < 0.0f) ns = -ns;
     h.geometric_normal = ng;
     h.shading_normal = ns;

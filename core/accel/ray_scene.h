@@ -39,6 +39,9 @@ struct SurfaceHit {
     vec3 geometric_normal{0.0f};  // world, unit, facing the incoming ray
     vec3 shading_normal{0.0f};    // world, unit, same hemisphere as geometric_normal
     vec2 uv{0.0f};
+    // The ray met the triangle's back (its winding's normal faced away; both normals above
+    // were flipped): the side a lightmap texel does not describe (lightmap_atlas.h).
+    bool back_face = false;
 };
 
 struct Ray {

@@ -349,7 +349,10 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
 VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit,
                                                            long* rays) const {
     Texel texel;
-    if (!maps_ || hit.object < 0 || size_t(hit.object) >= map_of_object_.size()) return texel;
+    // A texel holds its front's terms (the side its winding faces, lightmap_atlas.h): a hit on
+    // the back of a one-sided wall read the lit outside's through the wall.
+    if (!maps_ || hit.back_face || hit.object < 0 || size_t(hit.object) >= map_of_object_.size())
+        return texel;
     int mi = map_of_object_[size_t(hit.object)];
     if (mi == kSeveralPages) mi = lookup_.find(hit.object, hit.primitive);
     if (mi < 0) return texel;
