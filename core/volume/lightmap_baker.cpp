@@ -183,12 +183,10 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
             UnoccludedSingle* files = single_sums_[mi].empty() ? nullptr : &single;
             for (int s = first; s < first + samples; ++s) {
                 CounterRng rng = texel_random(settings_.seed, mi, i, s);
-                const IrradianceParts e =
+                add_texel_path(
                     estimator_.estimate(t.position, t.normal, t.albedo, rng, counters,
-                                        &fixed_[mi][i], &deferred_sums_[mi][i], rates[i], files);
-                sums_[mi][i] += e;
-                const float light = luminance(e.total());
-                light_squares_[mi][i] += light * light;
+                                        &fixed_[mi][i], &deferred_sums_[mi][i], rates[i], files),
+                    sums_[mi][i], light_squares_[mi][i]);
             }
             if (files) single_sums_[mi][i] += single;
         }
@@ -387,12 +385,10 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
             float light_squares = 0.0f;
             for (int s = 0; s < spp; ++s) {
                 CounterRng rng = texel_random(seed, lightmap, j, s);
-                const IrradianceParts e =
+                add_texel_path(
                     estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
-                                       &deferred[j], rates[j], files ? &unoccluded : nullptr);
-                sums[j] += e;
-                const float light = luminance(e.total());
-                light_squares += light * light;
+                                       &deferred[j], rates[j], files ? &unoccluded : nullptr),
+                    sums[j], light_squares);
             }
             if (files) single[j] += unoccluded;
             set_texel_filter_guide(guide, j, fixed, sums[j], light_squares, spp);

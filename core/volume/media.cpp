@@ -421,9 +421,8 @@ Media::SegmentBox Media::segment_box(const vec3& o, const vec3& d, double t_max)
         // A ray to infinity crosses media only inside their union: it ends where it leaves it.
         if (!bounded_) return b;
         double t0 = 0.0, t1 = t_max;
-        b.active = true;
         if (!clip_to_box(union_min_, union_max_, o, d, &t0, &t1)) {
-            b.misses_all = true;
+            b.active = b.misses_all = true;
             return b;
         }
         t_end = t1;

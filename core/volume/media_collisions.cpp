@@ -27,10 +27,19 @@
 
 namespace freqlab {
 
+namespace {
+
+// sigma_t per unit of the grid's density (1 for a homogeneous medium).
+double extinction_scale(const MediumDesc& m) {
+    return (m.sigma_s + m.sigma_a) * m.density_scale;
+}
+
+}  // namespace
+
 bool Media::collide(const Entry& e, const vec3& o, const vec3& d, double t0, double t1,
                     double target, MediumCollision* out) const {
     const double sigma_t = e.desc.sigma_s + e.desc.sigma_a;
-    const double k = sigma_t * e.desc.density_scale;
+    const double k = extinction_scale(e.desc);
     if (!(k > 0.0)) return false;
     double hit = -1.0, density = 1.0;
     if (e.grid) {
@@ -78,7 +87,7 @@ MediumCollision Media::sample_collision(const vec3& o, const vec3& d, double t_m
 }
 
 double Media::thickness(const Entry& e, const vec3& o, const vec3& d, double t0, double t1) const {
-    const double k = (e.desc.sigma_s + e.desc.sigma_a) * e.desc.density_scale;
+    const double k = extinction_scale(e.desc);
     if (!(k > 0.0) || !(t1 > t0)) return 0.0;
     return k * (e.grid ? e.grid->integral(o, d, t0, t1, e.grid_is_bounds) : t1 - t0);
 }
@@ -91,7 +100,7 @@ MediumCollision Media::collide_mixture(const std::vector<const Entry*>& active, 
     double k_sum = 0.0;
     for (const Entry* e : active) {
         homogeneous = homogeneous && !e->grid;
-        k_sum += (e->desc.sigma_s + e->desc.sigma_a) * e->desc.density_scale;
+        k_sum += extinction_scale(e->desc);
     }
     double t = 0.0;
     if (homogeneous) {

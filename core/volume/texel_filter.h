@@ -56,6 +56,14 @@ struct TexelFilterGuide {
 void set_texel_filter_guide(TexelFilterGuide& guide, size_t i,
                             const BakeEstimator::FixedDirect& fixed, const IrradianceParts& sum,
                             float light_squares = 0.0f, int paths = 1);
+// One path's estimate added to a texel's sum and to the sum of its paths' squared luminance
+// (what set_texel_filter_guide reads the sum's variance from).
+inline void add_texel_path(const IrradianceParts& path, IrradianceParts& sum,
+                           float& light_squares) {
+    sum += path;
+    const float light = luminance(path.total());
+    light_squares += light * light;
+}
 // Whether texels i and j's unfiltered light agrees (the filter's last test).
 bool texel_lights_agree(const TexelFilterGuide& guide, size_t i, size_t j);
 // The radius the baker filters `estimator`'s deferred terms with (0 unless impulse).

@@ -158,12 +158,9 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
         float light_squares = 0.0f;
         for (int s = 0; s < paths_; ++s) {
             CounterRng rng = texel_random(seed, key, i, s);
-            const IrradianceParts e =
-                estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
-                                   &m.deferred[i], -1.0f, &m.unoccluded[i]);
-            sum += e;
-            const float light = luminance(e.total());
-            light_squares += light * light;
+            add_texel_path(estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
+                                              &m.deferred[i], -1.0f, &m.unoccluded[i]),
+                           sum, light_squares);
         }
         set_texel_filter_guide(m.guide, i, fixed, sum, light_squares, paths_);
         m.gated[i] = fixed.known;  // its lights' shadows known (exact tracking)
