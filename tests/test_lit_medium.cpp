@@ -479,6 +479,21 @@ TEST(EmitterRoulette, KeepProbabilitiesFollowTheStrengths) {
     for (float k : keep) EXPECT_FLOAT_EQ(k, 1.0f);
 }
 
+// The distant lights' strength the point lights' strategies compete with: a directional light's
+// irradiance plus a quarter of the environment's radiance over the sphere, pi L for a uniform
+// sky of radiance L (a plane's irradiance under it), whatever the map's resolution; no distant
+// light: 0 (a lone point light is then always kept).
+TEST(EmitterRoulette, DistantLightStrengthIsTheirIrradiance) {
+    Fixture f(occluder_in_haze(R"({"type": "envmap", "radiance": 0.3},
+           {"type": "directional", "direction": [-0.25, 0.15, -1], "irradiance": 2.0},
+           {"type": "point", "position": [0.2, -0.1, 2.2], "intensity": 6.0})"));
+    const float d = distant_light_strength(f.scene.lights, f.rays->environment());
+    EXPECT_NEAR(d, 2.0 + kPiD * 0.3, 0.002 * (2.0 + kPiD * 0.3));
+    Fixture point(occluder_in_haze(R"({"type": "point", "position": [0.2, -0.1, 2.2],
+           "intensity": 6.0})"));
+    EXPECT_EQ(distant_light_strength(point.scene.lights, point.rays->environment()), 0.0f);
+}
+
 // Many lights of very different strengths around an occluder in haze (valley's case: a sun, a
 // faint and two strong point lights, a quad): impulse's texel terms (lit medium, corrections,
 // the walk) and VPT keep their means with the roulette on (budget 1) against every emitter

@@ -57,8 +57,10 @@ const SettingsSchema& BakeSettings::schema() {
                    "tracing at scattering events) are each kept by Russian roulette with "
                    "probability min(1, max(0.1, budget x its share of the vertex's emitter "
                    "strength)), weighted by its inverse: unbiased, about this many emitters a "
-                   "vertex instead of all of them (valley's 10 lights). A lone emitter is always "
-                   "kept. 0: every emitter, every time.")
+                   "vertex instead of all of them (valley's 10 lights). The point lights' light "
+                   "tracing and light along a segment also compete with the distant lights' "
+                   "irradiance (a sun outshining far lamps). A lone emitter is always kept. 0: "
+                   "every emitter, every time.")
             .field(&BakeSettings::texel_mc_radius, "texel_mc_radius", 0, 8, "texels",
                    kInvalidatesBake,
                    "Impulse: the texel's Monte Carlo terms (see texel_mc_rate) are the mean of "

@@ -69,6 +69,7 @@ BakeEstimator::BakeEstimator(const RayScene& scene, const Media& media, const Im
     }
     for (const Light& light : scene.scene().lights)
         if (light.type == LightType::Point) ++point_lights_;
+    distant_strength_ = distant_light_strength(scene.scene().lights, scene.environment());
     attenuates_ = method != BakeMethod::Surface && !media.empty();
     scatters_ = method == BakeMethod::Impulse && !media.empty();
     zh_clamped_cosine(kImpulseOrder, cosine_zh_);

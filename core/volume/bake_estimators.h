@@ -30,6 +30,7 @@
 
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <limits>
 #include <string>
 #include <vector>
@@ -325,17 +326,21 @@ class BakeEstimator {
     template <class Has>
     void emitter_keep(const std::vector<EmitterSample>& emitters, Has has,
                       std::vector<float>& keep) const;
-    // Each point light's keep probability from strength_of(light), in scene order; empty
-    // (every light kept, no number drawn) with fewer than two point lights or budget 0.
+    // Each point light's keep probability from strength_of(light), in scene order, against the
+    // distant lights' strength `competing` (emitter_roulette.h); empty (every light kept, no
+    // number drawn) with fewer than two of them or budget 0.
     template <class Strength>
-    void point_light_keep(Strength strength_of, std::vector<float>& keep) const {
+    void point_light_keep(Strength strength_of, float competing, std::vector<float>& keep) const {
         keep.clear();
-        if (point_lights_ < 2 || !(settings_.mc_emitter_budget > 0.0f)) return;
+        const bool distant = competing > 0.0f && std::isfinite(competing);
+        if (point_lights_ + (distant ? 1 : 0) < 2 || !(settings_.mc_emitter_budget > 0.0f)) return;
         thread_local std::vector<float> strength;
         strength.clear();
         for (const Light& light : scene_.scene().lights)
             if (light.type == LightType::Point) strength.push_back(strength_of(light));
+        if (distant) strength.push_back(competing);
         emitter_keep_probabilities(strength, settings_.mc_emitter_budget, keep);
+        keep.resize(size_t(point_lights_));
     }
     std::vector<float> mc_keep(const std::vector<EmitterSample>& emitters,
                                const std::vector<OccludedConnection>& occluded,
@@ -454,7 +459,8 @@ class BakeEstimator {
     const VertexCorrectionField* corrections_ = nullptr;
     int prepass_surface_depth_ = -1;
     std::unique_ptr<ImpulseIrradianceCache> irradiance_;  // impulse: tabulated double products
-    int point_lights_ = 0;  // the scene's (their roulette needs two or more)
+    int point_lights_ = 0;           // the scene's (their roulette needs two or more)
+    float distant_strength_ = 0.0f;  // D of emitter_roulette.h, when the estimator is built
     // Scenes with one medium: its table and the Media::version() it was resolved at.
     mutable std::atomic<const ImpulseIrradiance*> single_table_{nullptr};
     mutable std::atomic<uint64_t> single_version_{~uint64_t(0)};

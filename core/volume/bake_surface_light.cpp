@@ -75,7 +75,7 @@ vec3 BakeEstimator::point_lit_surface_light(const WalkScatter& at, CounterRng& r
             const vec3 to = light.position - at.x;
             return luminance(light.intensity) / std::max(glm::dot(to, to), 1e-12f);
         },
-        keep);
+        distant_strength_, keep);
     size_t k = 0;
     for (const Light& light : lights) {
         if (light.type != LightType::Point) continue;

@@ -40,7 +40,7 @@ vec3 BakeEstimator::point_lights_along(const vec3& o, const vec3& d, double t_ma
             return float(double(luminance(light.intensity)) / h *
                          (std::atan((t_end - delta) / h) - std::atan(-delta / h)));
         },
-        keep);
+        std::isfinite(t_end) && t_end > 0.0 ? distant_strength_ * float(t_end) : 0.0f, keep);
     size_t k = 0;
     for (const Light& light : lights) {
         if (light.type != LightType::Point) continue;
