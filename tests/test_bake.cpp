@@ -564,7 +564,9 @@ TEST(Bake, TexelFilterAveragesOnlyTheTexelsOwnSurfaceAndShadowSide) {
     ASSERT_EQ(maps.size(), 2u);
     for (const ObjectLightmap& map : maps) {
         const size_t n = map.texels.size();
-        TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 1.0f)};
+        TexelFilterGuide guide;  // without the sums' variance and scattered light
+        guide.shadows.assign(n, 0);
+        guide.light.assign(n, 1.0f);
         std::vector<IrradianceParts> sums(n);
         for (size_t i = 0; i < n; ++i) {
             const LightmapTexel& t = map.texels[i];

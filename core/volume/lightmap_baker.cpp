@@ -283,10 +283,9 @@ std::string LightmapBaker::encode_share() const {
             w.put_bytes(&light_squares_[mi][at], n * sizeof(float));
             if (!single_sums_[mi].empty())
                 w.put_bytes(&single_sums_[mi][at], n * sizeof(SingleCorrectionSums));
-            TexelFilterGuide guide{std::vector<uint64_t>(n, 0), std::vector<float>(n, 0.0f)};
-            for (size_t x = 0; x < n; ++x)
-                set_texel_filter_guide(guide, x, fixed_[mi][at + x], sums_[mi][at + x]);
-            w.put_bytes(guide.shadows.data(), n * sizeof(uint64_t));
+            std::vector<uint64_t> shadows(n);
+            for (size_t x = 0; x < n; ++x) shadows[x] = texel_shadow_bits(fixed_[mi][at + x]);
+            w.put_bytes(shadows.data(), n * sizeof(uint64_t));
         },
         [&](size_t i) { w.put_bytes(&probe_sums_[i], sizeof(BakeEstimator::ProbeParts)); });
     return std::move(w.bytes());

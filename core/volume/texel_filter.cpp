@@ -64,12 +64,17 @@ std::vector<float> texel_mc_rates(const ObjectLightmap& map, const BakeEstimator
     return rates;
 }
 
+uint64_t texel_shadow_bits(const BakeEstimator::FixedDirect& fixed) {
+    uint64_t bits = 0;
+    for (const auto& [light, connection] : fixed.occluded)
+        bits |= uint64_t(1) << (unsigned(light) % 64u);
+    return bits;
+}
+
 void set_texel_filter_guide(TexelFilterGuide& guide, size_t i,
                             const BakeEstimator::FixedDirect& fixed, const IrradianceParts& sum,
                             float light_squares, int paths) {
-    guide.shadows[i] = 0;
-    for (const auto& [light, connection] : fixed.occluded)
-        guide.shadows[i] |= uint64_t(1) << (unsigned(light) % 64u);
+    guide.shadows[i] = texel_shadow_bits(fixed);
     const float light = luminance(sum.total());
     guide.light[i] = light;
     if (!guide.scattered.empty()) guide.scattered[i] = luminance(sum.single + sum.multiple);

@@ -51,6 +51,8 @@ struct TexelFilterGuide {
                 std::vector<float>(n, 0.0f), std::vector<float>(n, 0.0f)};
     }
 };
+// The bits of the point and directional lights a texel's fixed direct light found occluded.
+uint64_t texel_shadow_bits(const BakeEstimator::FixedDirect& fixed);
 // Texel i's entry: its occluded fixed lights, the luminance of its unfiltered sum of `paths`
 // paths and, from `light_squares` (the sum of their luminances squared), that sum's variance.
 void set_texel_filter_guide(TexelFilterGuide& guide, size_t i,
