@@ -82,7 +82,9 @@ TEST(Media, BoxesRejectedBySegmentBoundsChangeNothing) {
             // Sums in another order: equal to the last bits.
             EXPECT_NEAR(s.tau_s, tau_s, 1e-12 * (1.0 + tau_s)) << i;
             EXPECT_EQ(all.exit_distance(o, d), exit) << i;
-            if (!std::isfinite(t_max)) EXPECT_EQ(s.length, exit) << i;
+            if (!std::isfinite(t_max)) {
+                EXPECT_EQ(s.length, exit) << i;
+            }
             (tau_s > 0.0 ? crossing : missing)++;
             // Free flights: the same collision from the same random numbers as with no
             // rejection (each medium alone draws its own uniform first, as the mixture does).
@@ -97,7 +99,9 @@ TEST(Media, BoxesRejectedBySegmentBoundsChangeNothing) {
                 if (ci.happened && ci.t < best.t) best = ci;
             }
             EXPECT_EQ(c.happened, best.happened) << i;
-            if (c.happened) EXPECT_EQ(c.t, best.t) << i;
+            if (c.happened) {
+                EXPECT_EQ(c.t, best.t) << i;
+            }
         }
     }
     EXPECT_GT(crossing, 1000);

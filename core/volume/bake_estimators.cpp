@@ -451,8 +451,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
         if (!fixed || !s.fixed) {
             const bool seen = direct_light(s, p, n, albedo_lum, rng, counters, parts, want,
                                            no_multiple && !keep_multiple);
-            if (!seen && s.fixed && unoccluded)
-                unoccluded->shadows |= uint64_t(1) << (unsigned(s.light) % 64u);
+            if (!seen && s.fixed && unoccluded) unoccluded->shadows |= shadow_bit(s.light);
             if (!seen && lit_here) occluded[i] = c;
         } else if (learn) {
             if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, want, no_multiple) &&

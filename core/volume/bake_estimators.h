@@ -99,6 +99,12 @@ struct BakeCounters {
 // and `paired_tables` holds the tables' single scattering of the very connections whose
 // corrections were drawn, weighted alike: the filter applies their ratio to the texel's own
 // tables (texel_filter.h, filter_single_corrections).
+// The bit of point / directional light `light` in a shadows word (UnoccludedSingle::shadows,
+// the texel filter's guide): lights past 64 share bits, which only merges shadow classes.
+inline uint64_t shadow_bit(int light) {
+    return uint64_t(1) << (unsigned(light) % 64u);
+}
+
 struct UnoccludedSingle {
     vec3 tables{0.0f}, correction{0.0f};
     uint64_t shadows = 0;

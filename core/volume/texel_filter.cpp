@@ -66,8 +66,7 @@ std::vector<float> texel_mc_rates(const ObjectLightmap& map, const BakeEstimator
 
 uint64_t texel_shadow_bits(const BakeEstimator::FixedDirect& fixed) {
     uint64_t bits = 0;
-    for (const auto& [light, connection] : fixed.occluded)
-        bits |= uint64_t(1) << (unsigned(light) % 64u);
+    for (const auto& [light, connection] : fixed.occluded) bits |= shadow_bit(light);
     return bits;
 }
 
