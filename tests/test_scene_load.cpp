@@ -179,6 +179,41 @@ TEST(SceneLoad, TerrainNormalsAreThoseOfItsSurface) {
     EXPECT_GT(worst, 0.998);
 }
 
+// Normals a mesh file lacks (load_mesh_file, kGeneratedNormalMaxAngle): a cube's faces meet at
+// 90 degrees and keep their own normals (assimp's default averaged its corners to the diagonal,
+// as on every box of valley's IFC houses); a roof whose two faces meet at 20 degrees is smoothed
+// along its ridge.
+TEST(SceneLoad, GeneratedNormalsKeepSharpEdges) {
+    const fs::path dir = fs::temp_directory_path() / "freqlab_generated_normals";
+    fs::create_directories(dir);
+    std::ofstream(dir / "cube.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                       "v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                                       "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\n"
+                                       "f 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+    const float rise = std::tan(glm::radians(10.0f));  // each face 10 degrees off horizontal
+    std::ofstream(dir / "roof.obj") << "v 0 0 0\nv 0 1 0\nv 1 0 " << rise << "\nv 1 1 " << rise
+                                    << "\nv 2 0 0\nv 2 1 0\nf 1 3 4 2\nf 3 5 6 4\n";
+    auto face_normal = [](const TriangleMesh& m, const uvec3& t) {
+        return glm::normalize(
+            glm::cross(m.positions[t.y] - m.positions[t.x], m.positions[t.z] - m.positions[t.x]));
+    };
+    const TriangleMesh cube = load_mesh_file(dir / "cube.obj", "cube.obj", "mesh");
+    ASSERT_EQ(cube.triangles.size(), 12u);
+    for (const uvec3& t : cube.triangles)
+        for (int k = 0; k < 3; ++k)
+            EXPECT_GT(glm::dot(face_normal(cube, t), glm::normalize(cube.normals[t[k]])), 0.9999f);
+    const TriangleMesh roof = load_mesh_file(dir / "roof.obj", "roof.obj", "mesh");
+    ASSERT_EQ(roof.triangles.size(), 4u);
+    int on_ridge = 0;
+    for (size_t v = 0; v < roof.positions.size(); ++v) {
+        if (std::abs(roof.positions[v].x - 1.0f) > 1e-6f) continue;
+        ++on_ridge;
+        EXPECT_GT(glm::normalize(roof.normals[v]).z, 0.9999f);  // the mean of the two faces
+    }
+    EXPECT_GT(on_ridge, 0);
+    fs::remove_all(dir);
+}
+
 // Objects naming one mesh file share it (and the ray scene's BVH): a level instancing a house
 // reads it once.
 TEST(SceneLoad, ObjectsNamingOneFileShareItsMesh) {

@@ -4,6 +4,7 @@
 
 #include "math/noise.h"
 
+#include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
@@ -185,6 +186,7 @@ TriangleMesh make_terrain(const TerrainShape& t) {
 TriangleMesh load_mesh_file(const std::filesystem::path& path, const std::string& origin,
                             const std::string& field) {
     Assimp::Importer importer;
+    importer.SetPropertyFloat(AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE, kGeneratedNormalMaxAngle);
     const aiScene* scene = importer.ReadFile(
         path.string(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                            aiProcess_GenSmoothNormals | aiProcess_PreTransformVertices |
