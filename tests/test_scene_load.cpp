@@ -179,6 +179,47 @@ TEST(SceneLoad, TerrainNormalsAreThoseOfItsSurface) {
     EXPECT_GT(worst, 0.998);
 }
 
+// A terrain's skirt (TerrainShape::skirt) closes the space under it at its edges: from below
+// the lowest possible height every ray that does not point down meets the terrain or a skirt
+// from behind (valley's low sun lit buried house slabs through the open sides); without a
+// skirt the horizontal ones escape.
+TEST(SceneLoad, TerrainSkirtClosesTheSpaceUnderIt) {
+    for (const float skirt : {0.0f, 2.0f}) {
+        const Scene s = parse_scene(
+            R"({"frames": 1, "camera": {"position": [0, -50, 10], "look_at": [0, 0, 0]},
+                "materials": {"m": {"type": "lambert"}},
+                "objects": [{"name": "ground", "material": "m", "shape": {"type": "terrain",
+                  "size": [40, 30], "cells": [40, 30], "height": 1.5, "frequency": 0.05,
+                  "skirt": )" +
+                std::to_string(skirt) + "}}]}",
+            "s.json", "");
+        const TriangleMesh& m = *s.objects[0].mesh;
+        EXPECT_EQ(m.triangles.size(), size_t(2 * 40 * 30 + (skirt > 0 ? 4 * (40 + 30) : 0)));
+        EmbreeDevice device(1);
+        RayScene rays(s, device);
+        rays.update(0.0f);
+        int escaped = 0, from_behind = 0, cast = 0;
+        for (int k = 0; k < 72; ++k)
+            for (const float elevation : {0.0f, 0.05f, 0.3f}) {
+                const float a = glm::radians(5.0f * float(k));
+                const vec3 d = glm::normalize(vec3(std::cos(a), std::sin(a), elevation));
+                const vec3 o(3.0f, -2.0f, -1.5f - 0.5f * std::max(skirt, 1.0f));
+                const SurfaceHit h = rays.intersect(Ray{o, d, 0.0f, 1e9f});
+                ++cast;
+                if (!h.valid)
+                    ++escaped;
+                else if (h.back_face)
+                    ++from_behind;
+            }
+        if (skirt > 0) {
+            EXPECT_EQ(escaped, 0);
+            EXPECT_EQ(from_behind, cast);  // the skirts face out
+        } else {
+            EXPECT_GT(escaped, 0);
+        }
+    }
+}
+
 // Normals a mesh file lacks (load_mesh_file, kGeneratedNormalMaxAngle): a cube's faces meet at
 // 90 degrees and keep their own normals (assimp's default averaged its corners to the diagonal,
 // as on every box of valley's IFC houses); a roof whose two faces meet at 20 degrees is smoothed

@@ -148,6 +148,44 @@ TriangleMesh make_torus(float major, float minor, int segments, int sides) {
     return m;
 }
 
+namespace {
+
+// Side walls from the height field's boundary down to z = bottom, facing out: the boundary
+// walked counter-clockwise seen from above, each side with its own vertices (its horizontal
+// normal) so that the corners stay sharp.
+void add_terrain_skirt(TriangleMesh& m, int nx, int ny, float bottom) {
+    auto top = [&](int i, int j) { return uint32_t(j * (nx + 1) + i); };
+    struct Side {
+        int i0, j0, di, dj, n;
+        vec3 normal;
+    };
+    const Side sides[4] = {{0, 0, 1, 0, nx, vec3(0, -1, 0)},
+                           {nx, 0, 0, 1, ny, vec3(1, 0, 0)},
+                           {nx, ny, -1, 0, nx, vec3(0, 1, 0)},
+                           {0, ny, 0, -1, ny, vec3(-1, 0, 0)}};
+    for (const Side& side : sides) {
+        const uint32_t first = uint32_t(m.positions.size());
+        for (int k = 0; k <= side.n; ++k) {
+            const uint32_t v = top(side.i0 + k * side.di, side.j0 + k * side.dj);
+            const vec3 p = m.positions[v];
+            const vec2 uv = m.uvs[v];
+            m.positions.push_back(p);
+            m.positions.push_back(vec3(p.x, p.y, bottom));
+            m.normals.push_back(side.normal);
+            m.normals.push_back(side.normal);
+            m.uvs.push_back(uv);
+            m.uvs.push_back(uv);
+        }
+        for (int k = 0; k < side.n; ++k) {
+            const uint32_t t0 = first + 2 * uint32_t(k), b0 = t0 + 1, t1 = t0 + 2, b1 = t0 + 3;
+            m.triangles.push_back({t0, b0, b1});
+            m.triangles.push_back({t0, b1, t1});
+        }
+    }
+}
+
+}  // namespace
+
 TriangleMesh make_terrain(const TerrainShape& t) {
     TriangleMesh m;
     const int nx = t.cells.x, ny = t.cells.y;
@@ -180,6 +218,7 @@ TriangleMesh make_terrain(const TerrainShape& t) {
             m.triangles.push_back({a, b, d});
             m.triangles.push_back({a, d, c});
         }
+    if (t.skirt > 0.0f) add_terrain_skirt(m, nx, ny, -t.height - t.skirt);
     return m;
 }
 

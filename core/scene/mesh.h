@@ -46,6 +46,10 @@ struct TerrainShape {
     int octaves = 4;
     uint32_t seed = 1;
     float uv_scale = 1.0f;
+    // > 0: side walls from the boundary down to skirt below the lowest possible height
+    // (z = -height - skirt), so that the space under the surface is closed at its edges (a
+    // one-sided ground let a low sun into it, onto geometry buried under the ground).
+    float skirt = 0.0f;
 };
 TriangleMesh make_terrain(const TerrainShape& t);
 

@@ -250,8 +250,8 @@ std::shared_ptr<const TriangleMesh> read_shape(const JsonReader& r, SceneObject&
         mesh = make_disk(positive("radius", 1.0),
                          r.has("segments") ? r.get("segments").integer_in(3, 1 << 16) : 64);
     } else if (type == "terrain") {
-        r.only_keys(
-            {"type", "size", "cells", "height", "frequency", "octaves", "seed", "uv_scale"});
+        r.only_keys({"type", "size", "cells", "height", "frequency", "octaves", "seed", "uv_scale",
+                     "skirt"});
         TerrainShape t;
         t.size = width_depth_or(r, t.size);
         if (r.has("cells")) {
@@ -264,6 +264,7 @@ std::shared_ptr<const TriangleMesh> read_shape(const JsonReader& r, SceneObject&
         t.octaves = r.has("octaves") ? r.get("octaves").integer_in(1, 12) : t.octaves;
         t.seed = r.has("seed") ? uint32_t(r.get("seed").integer_in(0, 1 << 30)) : t.seed;
         t.uv_scale = positive("uv_scale", 1.0);
+        t.skirt = float(r.number_or("skirt", t.skirt, 0, 1e9));
         mesh = make_terrain(t);
     } else {
         r.only_keys({"type", "major", "minor", "segments", "sides"});
