@@ -60,6 +60,12 @@ shot bake_tables_panel.png scenes/cornell_fog.json --method impulse --set bake.s
 # The production scene (issue "Method B, part 4"): its lightmapped preview, impulse | VPT.
 shot bake_valley_split_vpt.png scenes/valley.json --method impulse --set bake.quality=low \
      --set bake.texel_density=1 --set frame.width=640 --set frame.height=400 --compare
+# Its time-error plot: bench --study bake at 1 texel/unit (the plot is the study's own PNG).
+study=$(mktemp -d)
+"$bin" bench scenes/valley.json --study bake --set bake.quality=low --set bake.texel_density=1 \
+     --reference-spp 256 --max-spp 64 --out "$study" > /dev/null
+cp "$study/bench_bake_time_error.png" screenshots/bake_time_error_valley.png
+rm -rf "$study"
 shot bake_split_vpt.png scenes/cornell_fog.json --method impulse --set bake.spp=64 \
      --set frame.width=480 --set frame.height=360 --compare
 # Method B, light scattered into shadows: an umbra texel's trace (the lit medium's visibility and
