@@ -58,7 +58,7 @@ TriangleMesh make_terrain(const TerrainShape& t);
 // (175) averaged every box corner of the IFC house (scenes/valley.json): 53 % of its triangles
 // had shading normals 30-90 degrees off their face, flat walls were shaded as curved, and
 // bounces sampled about a floor's diagonal normal left below it, under the walls standing on
-// it: light reached the closed cavities of layered walls (texels VPT reads 0 at 0.18). 30, as
+// it: light reached closed cavities of layered walls (0.18 at texels VPT reads 0). 30, as
 // the auto-smooth default of modelling tools; meshes with their own normals keep them.
 constexpr float kGeneratedNormalMaxAngle = 30.0f;
 // All meshes of a file flattened into one (node transforms applied).

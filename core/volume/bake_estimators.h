@@ -88,6 +88,12 @@ struct BakeCounters {
     long guarded = 0;          // non-finite estimates dropped
 };
 
+// The bit of point / directional light `light` in a shadows word (UnoccludedSingle::shadows,
+// the texel filter's guide): lights past 64 share bits, which only merges shadow classes.
+inline uint64_t shadow_bit(int light) {
+    return uint64_t(1) << (unsigned(light) % 64u);
+}
+
 // A vertex's tables' single scattering of its unoccluded connections and, at a texel of the
 // vertex correction field's prepass, the Monte Carlo corrections of it (single_correction,
 // local_single_correction): the field carries their ratio, which a deeper vertex applies to its
@@ -99,12 +105,6 @@ struct BakeCounters {
 // and `paired_tables` holds the tables' single scattering of the very connections whose
 // corrections were drawn, weighted alike: the filter applies their ratio to the texel's own
 // tables (texel_filter.h, filter_single_corrections).
-// The bit of point / directional light `light` in a shadows word (UnoccludedSingle::shadows,
-// the texel filter's guide): lights past 64 share bits, which only merges shadow classes.
-inline uint64_t shadow_bit(int light) {
-    return uint64_t(1) << (unsigned(light) % 64u);
-}
-
 struct UnoccludedSingle {
     vec3 tables{0.0f}, correction{0.0f};
     uint64_t shadows = 0;
