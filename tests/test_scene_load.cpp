@@ -15,6 +15,16 @@
 namespace fs = std::filesystem;
 using namespace freqlab;
 
+namespace {
+
+// The unit normal of triangle t, by its winding.
+vec3 face_normal(const TriangleMesh& m, const uvec3& t) {
+    return glm::normalize(
+        glm::cross(m.positions[t.y] - m.positions[t.x], m.positions[t.z] - m.positions[t.x]));
+}
+
+}  // namespace
+
 TEST(SceneLoad, EveryFileInScenesLoads) {
     int count = 0;
     for (const auto& entry :
@@ -172,8 +182,7 @@ TEST(SceneLoad, TerrainNormalsAreThoseOfItsSurface) {
     EXPECT_GT(hi - lo, 1.0f);  // not flat
     double worst = 1.0;
     for (const uvec3& tri : m.triangles) {
-        const vec3 n = glm::normalize(glm::cross(m.positions[tri.y] - m.positions[tri.x],
-                                                 m.positions[tri.z] - m.positions[tri.x]));
+        const vec3 n = face_normal(m, tri);
         for (int k = 0; k < 3; ++k) worst = std::min(worst, double(glm::dot(n, m.normals[tri[k]])));
     }
     EXPECT_GT(worst, 0.998);
@@ -234,10 +243,6 @@ TEST(SceneLoad, GeneratedNormalsKeepSharpEdges) {
     const float rise = std::tan(glm::radians(10.0f));  // each face 10 degrees off horizontal
     std::ofstream(dir / "roof.obj") << "v 0 0 0\nv 0 1 0\nv 1 0 " << rise << "\nv 1 1 " << rise
                                     << "\nv 2 0 0\nv 2 1 0\nf 1 3 4 2\nf 3 5 6 4\n";
-    auto face_normal = [](const TriangleMesh& m, const uvec3& t) {
-        return glm::normalize(
-            glm::cross(m.positions[t.y] - m.positions[t.x], m.positions[t.z] - m.positions[t.x]));
-    };
     const TriangleMesh cube = load_mesh_file(dir / "cube.obj", "cube.obj", "mesh");
     ASSERT_EQ(cube.triangles.size(), 12u);
     for (const uvec3& t : cube.triangles)
