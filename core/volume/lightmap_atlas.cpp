@@ -293,11 +293,19 @@ void place_texels(const RayScene& rs, size_t oi, const std::vector<vec3>& world,
         const float f =
             backface_fraction(rs, tx.position, tx.normal, settings.validity_rays,
                               mix64(oi * 0x100000000ULL + (size_t(map.page) << 40) + i));
-        if (f > settings.backface_tolerance) tx.state = TexelState::InsideGeometry;
+        if (f > settings.backface_tolerance)
+            tx.state = TexelState::InsideGeometry;
+        else
+            tx.covered =
+                covered_along(rs, tx.position, tx.normal, kTexelCoverReach / map.density_at(i));
     });
 }
 
 }  // namespace
+
+bool covered_along(const RayScene& rays, const vec3& p, const vec3& n, float reach) {
+    return rays.occluded(shadow_ray(spawn_point(p, n), n, reach));
+}
 
 std::string reduction_note(const Scene& scene, const ObjectLightmap& map, const AtlasReduction& r) {
     return object_label(scene, map.object) +

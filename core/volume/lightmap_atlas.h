@@ -8,8 +8,10 @@
 // centre at least a quarter texel inside a rectangular chart's edges, never on a seam). A texel
 // whose centre falls inside a triangle is placed at that point; a valid texel whose hemisphere sees
 // more back faces than `backface_tolerance` (a fraction of `validity_rays` rays over its
-// hemisphere) lies inside geometry and is flagged; after a bake, empty and invalid texels next to
-// valid ones take their neighbours' mean (dilation), so bilinear lookups do not bleed black.
+// hemisphere) lies inside geometry and is flagged, one with geometry right above it is marked
+// covered (kTexelCoverReach; the texel filters keep it apart from open neighbours); after a
+// bake, empty and invalid texels next to valid ones take their neighbours' mean (dilation), so
+// bilinear lookups do not bleed black.
 // Spheres (exact primitives, no mesh), moving objects, perfect mirrors (a mirror's appearance is
 // not view-independent) and objects whose scene entry says "lightmap": false get no lightmap.
 //
@@ -39,11 +41,22 @@ enum class TexelState : uint8_t { Empty = 0, Valid = 1, InsideGeometry = 2, Dila
 
 struct LightmapTexel {
     TexelState state = TexelState::Empty;
+    // Geometry lies within kTexelCoverReach of a texel above its centre, along its normal (a
+    // floor over the ground, the inner layer of a wall): its light differs from an open
+    // neighbour's, so the texel filters do not mix the two (set for valid texels).
+    bool covered = false;
     int triangle = -1;
     vec3 position{0.0f};  // world
     vec3 normal{0.0f};    // world shading normal, unit
     vec3 albedo{0.0f};    // the material's albedo texture at the point
 };
+
+// How far above a surface point geometry covers it, in texels of its chart: valley's IFC walls
+// stand in layers 0.025 apart (the straddle rays of vertex_corrections.cpp, 0.1 texel high, run
+// past the inner layer), its floors 0.03-0.09 above the terrain.
+constexpr float kTexelCoverReach = 0.25f;
+// Whether geometry lies within `reach` of p along n.
+bool covered_along(const RayScene& rays, const vec3& p, const vec3& n, float reach);
 
 // A density the atlas could not honour: `charts` charts of the object got `granted` texels per
 // unit instead of `requested`, because of `reason`.

@@ -15,7 +15,7 @@ bool on_surface_of(const ObjectLightmap& map, size_t i, size_t j, int radius) {
     const LightmapTexel &t = map.texels[i], &u = map.texels[j];
     const float reach = 1.5f * float(radius + 1) * std::sqrt(2.0f) / map.density_at(i);
     return u.state == TexelState::Valid && glm::dot(u.normal, t.normal) >= 0.9f &&
-           glm::length(u.position - t.position) <= reach;
+           u.covered == t.covered && glm::length(u.position - t.position) <= reach;
 }
 
 template <typename Visit>
