@@ -3,9 +3,9 @@
 // the lit medium below the horizon, hidden surfaces' light, the multiple-scattering walk) are
 // smooth over the surface, but at bake.texel_mc_rate of the paths their per-texel estimate is
 // noisy. Each texel takes the mean of the texels within `radius` of it in the atlas that lie
-// on its own surface (valid, normals within ~25 degrees, covered alike (lightmap_atlas.h: a
-// floor's underside over the ground beside its overhang at 1 texel/unit, 0.125 where VPT reads
-// 0.001), world distance within the window's, so that a neighbouring chart across a gutter
+// on its own surface (valid, normals within ~25 degrees, covered alike (lightmap_atlas.h: the
+// ground under a floor apart from the open ground beside it, as in the vertex field's neighbour
+// means), world distance within the window's, so that a neighbouring chart across a gutter
 // never mixes in) and on the same side of every
 // point or directional light's shadow: those terms jump there (the lit medium of an occluded
 // connection stands in for the tables' response plus a correction), their sum with the
