@@ -194,8 +194,9 @@ TEST(LightmapAtlas, BadOptionsAreRefusedNamingTheField) {
 
 // Cover (lightmap_atlas.h): ground texels under a floor 0.05 above them are covered, the open
 // ground beside it and the floor's top are not, and the texel filter never averages covered
-// texels with open ones on the same surface (at 1 texel/unit valley's house floors' undersides
-// read the lit medium beside the house through it: 0.125 where VPT reads 0.001).
+// texels with open ones on the same surface (at 1 texel/unit valley's ground under a house's
+// floor took the vertex field's value of the open ground beside it: house03:224,47 read 0.055
+// where VPT reads 0.0003).
 TEST(LightmapAtlas, TexelsUnderAFloorAreCoveredAndFilteredApartFromTheOpenGround) {
     Fixture f(R"({"frames": 1, "camera": {"position": [0, -9, 4], "look_at": [0, 0, 0]},
       "materials": {"m": {"type": "lambert", "albedo": 0.5}},

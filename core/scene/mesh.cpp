@@ -150,11 +150,15 @@ TriangleMesh make_torus(float major, float minor, int segments, int sides) {
 
 namespace {
 
+// The terrain's grid vertex (i, j) of nx x ny cells, row by row.
+uint32_t terrain_vertex(int nx, int i, int j) {
+    return uint32_t(j * (nx + 1) + i);
+}
+
 // Side walls from the height field's boundary down to z = bottom, facing out: the boundary
 // walked counter-clockwise seen from above, each side with its own vertices (its horizontal
 // normal) so that the corners stay sharp.
 void add_terrain_skirt(TriangleMesh& m, int nx, int ny, float bottom) {
-    auto top = [&](int i, int j) { return uint32_t(j * (nx + 1) + i); };
     struct Side {
         int i0, j0, di, dj, n;
         vec3 normal;
@@ -166,7 +170,7 @@ void add_terrain_skirt(TriangleMesh& m, int nx, int ny, float bottom) {
     for (const Side& side : sides) {
         const uint32_t first = uint32_t(m.positions.size());
         for (int k = 0; k <= side.n; ++k) {
-            const uint32_t v = top(side.i0 + k * side.di, side.j0 + k * side.dj);
+            const uint32_t v = terrain_vertex(nx, side.i0 + k * side.di, side.j0 + k * side.dj);
             const vec3 p = m.positions[v];
             const vec2 uv = m.uvs[v];
             m.positions.push_back(p);
@@ -202,7 +206,7 @@ TriangleMesh make_terrain(const TerrainShape& t) {
         for (int i = 0; i <= nx; ++i) {
             const double x = (double(i) / nx - 0.5) * t.size.x,
                          y = (double(j) / ny - 0.5) * t.size.y;
-            const size_t v = size_t(j) * size_t(nx + 1) + size_t(i);
+            const size_t v = terrain_vertex(nx, i, j);
             m.positions[v] = vec3(float(x), float(y), float(height(x, y)));
             const double dzdx = (height(x + hx, y) - height(x - hx, y)) / (2.0 * hx);
             const double dzdy = (height(x, y + hy) - height(x, y - hy)) / (2.0 * hy);
@@ -213,7 +217,7 @@ TriangleMesh make_terrain(const TerrainShape& t) {
     m.triangles.reserve(size_t(nx) * size_t(ny) * 2);
     for (int j = 0; j < ny; ++j)
         for (int i = 0; i < nx; ++i) {
-            const uint32_t a = uint32_t(j * (nx + 1) + i), b = a + 1, c = a + uint32_t(nx + 1),
+            const uint32_t a = terrain_vertex(nx, i, j), b = a + 1, c = a + uint32_t(nx + 1),
                            d = c + 1;
             m.triangles.push_back({a, b, d});
             m.triangles.push_back({a, d, c});

@@ -87,23 +87,16 @@ bool straddles_geometry(const RayScene& rays, const ObjectLightmap& map, size_t 
     return false;
 }
 
-// A texel whose centre and corners differ in cover (lightmap_atlas.h: the inner layer of a wall
-// ends inside its footprint) straddles too.
-struct Cover {
-    bool centre = false, mixed = false;
-};
-
-Cover cover_of(const RayScene& rays, const ObjectLightmap& map, size_t i) {
+// Whether texel i's footprint corners differ in cover from its centre (lightmap_atlas.h: the
+// inner layer of a wall ends inside it); such a texel straddles too.
+bool cover_mixed(const RayScene& rays, const ObjectLightmap& map, size_t i) {
     const LightmapTexel& t = map.texels[i];
     const Frame frame(t.normal);
     const float reach = kTexelCoverReach / map.density_at(i), half = 0.45f / map.density_at(i);
-    Cover c;
-    c.centre = t.covered;
     for (const vec3& d :
          {frame.t + frame.b, frame.t - frame.b, -frame.t + frame.b, -frame.t - frame.b})
-        c.mixed =
-            c.mixed || covered_along(rays, t.position + d * half, t.normal, reach) != c.centre;
-    return c;
+        if (covered_along(rays, t.position + d * half, t.normal, reach) != t.covered) return true;
+    return false;
 }
 
 // Whether the segment between two points is clear.
@@ -126,8 +119,7 @@ bool uses_vertex_corrections(BakeMethod method, const BakeSettings& settings,
 struct VertexCorrectionField::MapTerms {
     std::vector<IrradianceParts> deferred;
     std::vector<UnoccludedSingle> unoccluded;
-    std::vector<char> gated, straddles;
-    std::vector<Cover> cover;
+    std::vector<char> gated, straddles, cover_mixed;
     TexelFilterGuide guide;
 };
 
@@ -140,7 +132,7 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
     m.unoccluded.resize(n);
     m.gated.assign(n, 0);
     m.straddles.assign(n, 0);
-    m.cover.resize(n);
+    m.cover_mixed.assign(n, 0);
     m.guide = TexelFilterGuide::sized(n);
     std::vector<char> done(n, 0);
     auto run = [&](size_t i) {
@@ -165,8 +157,8 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
     auto valid = [&](size_t i) { return map.texels[i].state == TexelState::Valid; };
     tbb::parallel_for(size_t(0), n, [&](size_t i) {
         if (!valid(i)) return;
-        m.cover[i] = cover_of(rays, map, i);
-        m.straddles[i] = m.cover[i].mixed || straddles_geometry(rays, map, i);
+        m.cover_mixed[i] = cover_mixed(rays, map, i);
+        m.straddles[i] = m.cover_mixed[i] || straddles_geometry(rays, map, i);
     });
     // Neighbours in the atlas stand for a texel when they face its way, are covered as it is
     // and, where geometry crosses either footprint, see it (not the eave's light for the attic
@@ -278,9 +270,9 @@ long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& 
         h[13] = m.gated[i] ? 1 : 0;
         if (m.straddles[i]) {
             packed.straddles[i / 64].bits |= uint64_t(1) << (i % 64);
-            const bool mixed = m.cover[i].mixed;
+            const bool mixed = m.cover_mixed[i];
             packed.centres.push_back({uint32_t(i), lifted_centre(map, i), straddle_lift(map, i),
-                                      mixed, mixed && m.cover[i].centre});
+                                      mixed, mixed && map.texels[i].covered});
             ++straddling;
         }
     }

@@ -138,7 +138,7 @@ class VertexCorrectionField {
         vec3 lifted_centre;
         float lift;
         // Geometry close above covers part of the footprint: a hit reads the texel only when
-        // covered as its centre is (a ray along the hit's normal, kCoverReach of a texel).
+        // covered as its centre is (a ray along the hit's normal, kTexelCoverReach of a texel).
         bool check_cover = false, covered = false;
     };
     // Emitters, surface light, ratio (RGB each), the shadows' 64 bits, whether they are known.
