@@ -777,6 +777,58 @@ TEST(Bake, VertexCorrectionFieldIsNotReadInAGapUnderALid) {
     EXPECT_FALSE(open.holds_for(1));  // light 0 occluded: not like the centre
 }
 
+// A pocket 0.1 high over a floor at 1 texel per unit, closed by a wall standing exactly on a
+// texel's centre (x = 1.5) and open on the far side; a partition at y = 0.8 crosses the texels
+// (they straddle). Valley's layered IFC walls are so (pockets 0.025 wide, walls at round
+// coordinates, where texel centres fall): a hit in a pocket, lifted by the straddle test's 0.1
+// texel, came out through the pocket's far wall, and its ray to the lifted centre ended on the
+// centre's wall plane, unblocked: the pocket read the other side's value (house10:98,270: 0.20
+// where VPT reads 0). Here the old ray read the texel from the wall's open side through that
+// plane. The ray now runs from the hit itself to the lifted centre and on past it: a centre on
+// a wall is read from neither side, a clear one from its own side only.
+TEST(Bake, VertexCorrectionFieldIsNotReadAcrossAWallOnTheTexelCentre) {
+    Fixture f(R"({"frames": 1, "camera": {"position": [0, -9, 5], "look_at": [0, 0, 0]},
+      "materials": {"m": {"type": "lambert", "albedo": 0.6}},
+      "objects": [{"name": "floor", "shape": {"type": "plane", "size": [8, 8]}, "material": "m"},
+                  {"name": "wall", "shape": {"type": "plane", "size": [1, 8]}, "material": "m",
+                   "lightmap": false, "transform": {"translate": [1.5, 0, 0.5],
+                                                    "rotate": {"axis": [0, 1, 0], "deg": -90}}},
+                  {"name": "lid", "shape": {"type": "plane", "size": [0.4, 8]}, "material": "m",
+                   "lightmap": false, "transform": {"translate": [1.7, 0, 0.1],
+                                                    "rotate": {"axis": [1, 0, 0], "deg": 180}}},
+                  {"name": "partition", "shape": {"type": "plane", "size": [2, 1]},
+                   "material": "m", "lightmap": false,
+                   "transform": {"translate": [2, 0.8, 0.5],
+                                 "rotate": {"axis": [1, 0, 0], "deg": 90}}}],
+      "lights": [{"type": "directional", "direction": [0.3, 0.2, -1], "irradiance": 3}],
+      "media": [{"sigma_s": 0.08, "sigma_a": 0.01, "g": 0.3,
+                 "bounds": {"box": {"min": [-4, -4, 0], "max": [4, 4, 4]}}}]})");
+    const std::unique_ptr<LightmapBaker> baker = bake_field(f, 4);
+    const VertexCorrectionField* field = baker->vertex_corrections();
+    ASSERT_NE(field, nullptr);
+    const ObjectLightmap& floor = baker->lightmaps().at(0);
+    auto centre_x = [&](const SurfaceHit& hit) {
+        vec2 uv;
+        EXPECT_TRUE(lightmap_uv(*f.rays, floor, hit, &uv));
+        const LightmapTexel& t =
+            floor.texels[size_t(int(uv.y)) * size_t(floor.width) + size_t(int(uv.x))];
+        EXPECT_EQ(t.state, TexelState::Valid);
+        return t.position.x;
+    };
+    const SurfaceHit in_pocket = floor_hit(f, 1.6f, 0.4f, 0.05f);
+    EXPECT_NEAR(centre_x(in_pocket), 1.5f, 1e-5f);
+    EXPECT_FALSE(field->locate(in_pocket).found());
+    EXPECT_FALSE(field->locate(floor_hit(f, 1.9f, 0.3f, 0.05f)).found());
+    EXPECT_FALSE(field->locate(floor_hit(f, 1.3f, 0.4f, 1.0f)).found());
+    // The next texel (centre 2.5, clear), crossed by the partition: read on its centre's side.
+    const SurfaceHit near_side = floor_hit(f, 2.4f, 0.3f, 1.0f);
+    EXPECT_NEAR(centre_x(near_side), 2.5f, 1e-5f);
+    long rays = 0;
+    EXPECT_TRUE(field->locate(near_side, &rays).found());
+    EXPECT_GE(rays, 1);
+    EXPECT_FALSE(field->locate(floor_hit(f, 2.4f, 0.9f, 1.0f)).found());
+}
+
 // A closed crate on a sunlit floor in fog, at 1 texel per unit: the floor's texels under it lie
 // inside geometry; the two rings of them nearest its walls were dilated from the sunlit texels
 // outside, and the field held there for any hit. Valley's hits in the closed cavities of its

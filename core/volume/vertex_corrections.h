@@ -131,8 +131,8 @@ class VertexCorrectionField {
     // so nothing overflows; relative precision 2^-11). A lookup is one random read, a cache
     // miss at 24 bytes a texel: 8 % of a smoke_room impulse bake, against ~2 % at 12 (28 now: the
     // ratio and the shadows joined in session 28). A texel crossed by geometry: its centre lifted
-    // off the surface by `lift` (the visibility ray from a hit runs as far above the hit's
-    // surface).
+    // off the surface by `lift` (the visibility ray from a hit runs from the hit to it and half
+    // a lift on).
     struct StraddlingTexel {
         uint32_t texel;
         vec3 lifted_centre;
