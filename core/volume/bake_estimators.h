@@ -211,11 +211,11 @@ class BakeEstimator {
     };
     // Light of one emitter sample scattered into (p, n) by the lit medium around p, for a
     // connection the tables cannot take (occluded, or below the horizon): one point x_t drawn
-    // along a cosine-sampled direction w (free-flight distance for distant emitters,
-    // equiangular about the emitter point otherwise), a shadow ray from x_t to the emitter and
-    // one from p to x_t when geometry may lie between them; the single-scattered irradiance
-    // pi T(p, x_t) sigma_s(x_t) f_HG E(x_t) T(x_t, emitter) V / pdf(t), unbiased for single
-    // scattering through the real (heterogeneous, bounded) media and geometry.
+    // along a cosine-sampled direction w (a forced collision of the real media for distant
+    // emitters, equiangular about the emitter point otherwise), a shadow ray from x_t to the
+    // emitter and one from p to x_t when geometry may lie between them; the single-scattered
+    // irradiance pi T(p, x_t) sigma_s(x_t) f_HG E(x_t) T(x_t, emitter) V / pdf(t), unbiased for
+    // single scattering through the real (heterogeneous, bounded) media and geometry.
     struct LitMediumSample {
         bool in_medium = false;  // a point was drawn inside the media
         bool seen = false;       // it sees the receiver

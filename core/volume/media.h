@@ -103,6 +103,8 @@ struct MediumCollision {
     bool happened = false;
     double t = 0.0;
     double sigma_s = 0.0, sigma_t = 0.0, g = 0.0;  // of the medium collided with, at the point
+    double sigma_t_all = 0.0;  // every medium's at the point (the collision density's rate)
+    double pdf = 0.0;          // forced collisions: t's density, sigma_t_all T(t) / P
 };
 
 class Media {
@@ -136,8 +138,8 @@ class Media {
     // A collision before t_max given that one happens (a forced collision), weighted so that
     // E[weight f(t); found] = P E[f(t) | collision], P = 1 - T(t_max) the probability of a
     // collision: the conditioned law inverted through all the media crossed (T(t) = 1 - u P,
-    // media_collisions.cpp), weight P. Not found (no medium, or rounding short of the target):
-    // happened = false, *weight = 0.
+    // media_collisions.cpp), weight P, and t's density in the result's pdf. Not found (no medium,
+    // or rounding short of the target): happened = false, *weight = 0.
     MediumCollision sample_forced_collision(const vec3& o, const vec3& d, double t_max,
                                             CounterRng& rng, double* weight) const;
     // Where the ray leaves the last bounded medium it crosses; infinity when a medium fills

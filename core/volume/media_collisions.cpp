@@ -1,5 +1,6 @@
 // Free-flight collisions through a scene's media (Media, media.h): the analog draw of every
-// walk segment, and the forced first collision of impulse's texel walks (bake_walk.cpp).
+// walk segment, and the forced first collision of impulse's texel walks (bake_walk.cpp) and of
+// its lit-medium points for distant lights (bake_lit_medium.cpp).
 //
 // A forced collision is drawn from the law conditioned on a collision before t_max, with
 // density sigma_t(t) T(t) / P, P = 1 - T(t_max), weight P: the total optical thickness
@@ -63,6 +64,7 @@ bool Media::collide(const Entry& e, const vec3& o, const vec3& d, double t0, dou
     out->happened = true;
     out->t = hit;
     out->sigma_t = sigma_t * density * e.desc.density_scale;
+    out->sigma_t_all = out->sigma_t;
     out->sigma_s = e.desc.sigma_s * density * e.desc.density_scale;
     out->g = e.desc.g;
     return true;
@@ -144,6 +146,7 @@ MediumCollision Media::collide_mixture(const std::vector<const Entry*>& active, 
     c.happened = true;
     c.t = t;
     c.sigma_t = sigma[m];
+    c.sigma_t_all = total;
     c.sigma_s = desc.sigma_s * scale;
     c.g = desc.g;
     return c;
@@ -200,6 +203,7 @@ MediumCollision Media::sample_forced_collision(const vec3& o, const vec3& d, dou
             if (!c.happened) return {};
         }
         *weight = p;
+        c.pdf = c.sigma_t_all * std::exp(-target) / p;
         return c;
     }
     return {};  // the thickness short of target by rounding
