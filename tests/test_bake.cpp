@@ -676,6 +676,15 @@ SurfaceHit floor_hit(const Fixture& f, float x, float y, float from_z) {
     return hit;
 }
 
+// The texel of `map` that `hit` lands in (the field's nearest-texel rule).
+const LightmapTexel& texel_at(const Fixture& f, const ObjectLightmap& map, const SurfaceHit& hit) {
+    vec2 uv;
+    EXPECT_TRUE(lightmap_uv(*f.rays, map, hit, &uv));
+    const int x = std::clamp(int(uv.x), 0, map.width - 1);
+    const int y = std::clamp(int(uv.y), 0, map.height - 1);
+    return map.texels[size_t(y) * size_t(map.width) + size_t(x)];
+}
+
 }  // namespace
 
 // A closed room (walls 0.15 thick at half-width 1.1-1.25, a canopy reaching past them as its
@@ -808,10 +817,7 @@ TEST(Bake, VertexCorrectionFieldIsNotReadAcrossAWallOnTheTexelCentre) {
     ASSERT_NE(field, nullptr);
     const ObjectLightmap& floor = baker->lightmaps().at(0);
     auto centre_x = [&](const SurfaceHit& hit) {
-        vec2 uv;
-        EXPECT_TRUE(lightmap_uv(*f.rays, floor, hit, &uv));
-        const LightmapTexel& t =
-            floor.texels[size_t(int(uv.y)) * size_t(floor.width) + size_t(int(uv.x))];
+        const LightmapTexel& t = texel_at(f, floor, hit);
         EXPECT_EQ(t.state, TexelState::Valid);
         return t.position.x;
     };
@@ -848,13 +854,7 @@ TEST(Bake, VertexCorrectionFieldIsReadOnValidTexelsOnly) {
     const VertexCorrectionField* field = baker->vertex_corrections();
     ASSERT_NE(field, nullptr);
     const ObjectLightmap& floor = baker->lightmaps().at(0);
-    auto state_at = [&](const SurfaceHit& hit) {
-        vec2 uv;
-        EXPECT_TRUE(lightmap_uv(*f.rays, floor, hit, &uv));
-        const int x = std::clamp(int(uv.x), 0, floor.width - 1);
-        const int y = std::clamp(int(uv.y), 0, floor.height - 1);
-        return floor.texels[size_t(y) * size_t(floor.width) + size_t(x)].state;
-    };
+    auto state_at = [&](const SurfaceHit& hit) { return texel_at(f, floor, hit).state; };
     // Inside the crate: one texel in from its wall (the dilated ring) and at its centre.
     for (const vec2 p : {vec2(1.6f, 0.3f), vec2(0.3f, 0.2f), vec2(-1.4f, -0.6f)}) {
         const SurfaceHit inside = floor_hit(f, p.x, p.y, 1.0f);
