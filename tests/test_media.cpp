@@ -303,7 +303,9 @@ TEST(Media, FreeFlightsFollowTheTransmittanceLaw) {
 // conditioned law is inverted through their summed thickness, so every draw collides, with
 // weight P; P(t < s | collision) = (1 - T(s)) / P, and the medium collided with is each one
 // with probability (integral of sigma_t,m T) / P (midpoint quadrature, 40000 steps; each
-// medium's sigma from a Media of it alone). Binomial, 4.5 sigma.
+// medium's sigma from a Media of it alone). Binomial, 4.5 sigma. The pdf each draw reports
+// (the impulse bake's lit-medium points divide by it) is sigma_t T / P at its t, and E[1 / pdf]
+// the segment's length.
 TEST(Media, ForcedCollisionsThroughSeveralMediaInvertTheConditionedLaw) {
     const std::string grid = R"({"sigma_s": 0.3, "sigma_a": 0.1, "g": 0.5,
         "bounds": {"box": {"min": [0,-1,-1], "max": [2,1,1]}},
@@ -330,6 +332,7 @@ TEST(Media, ForcedCollisionsThroughSeveralMediaInvertTheConditionedLaw) {
     const int n = 40000;
     std::vector<double> ts;
     int picked[3] = {};
+    double inverse_pdf = 0.0, inverse_pdf_sq = 0.0;
     for (int i = 0; i < n; ++i) {
         CounterRng rng(11, 0, uint64_t(i), 0);
         double weight = -1.0;
@@ -345,7 +348,19 @@ TEST(Media, ForcedCollisionsThroughSeveralMediaInvertTheConditionedLaw) {
         const HomogeneousMedium at = alone[which].at(o + d * float(c.t));
         ASSERT_NEAR(c.sigma_t, at.sigma_t(), 1e-6 * at.sigma_t() + 1e-9) << c.t;
         ASSERT_NEAR(c.sigma_s, at.sigma_s, 1e-6 * at.sigma_s + 1e-9) << c.t;
+        // t's density: every medium's sigma_t there times T(t), over P.
+        const vec3 x = o + d * float(c.t);
+        const double density =
+            (alone[0].at(x).sigma_t() + alone[1].at(x).sigma_t() + alone[2].at(x).sigma_t()) *
+            m.transmittance(o, d, c.t) / p;
+        ASSERT_NEAR(c.pdf, density, 1e-6 * density) << c.t;
+        inverse_pdf += 1.0 / c.pdf;
+        inverse_pdf_sq += 1.0 / (c.pdf * c.pdf);
     }
+    // The global medium has sigma_t > 0 everywhere: E[1 / pdf] is the segment's length.
+    const double mean = inverse_pdf / n,
+                 se = std::sqrt(std::max(0.0, inverse_pdf_sq / n - mean * mean) / n);
+    EXPECT_NEAR(mean, t_max, 4.5 * se);
     for (double s : {0.2, 0.6, 1.0, 1.4, 1.7, 2.2, 2.8}) {
         const double expected = (1.0 - m.transmittance(o, d, s)) / p;
         const double share =
