@@ -655,6 +655,22 @@ TEST(Bake, MethodListKeepsEverySeparator) {
 
 namespace {
 
+// The field tests' scene: an 8 x 8 floor (albedo 0.6) in fog, `objects` after it (each
+// preceded by a comma), lit by `light`.
+std::string fog_floor_scene(
+    const std::string& objects,
+    const std::string& light =
+        R"({"type": "directional", "direction": [0.3, 0.2, -1], "irradiance": 3})") {
+    return R"({"frames": 1, "camera": {"position": [0, -9, 5], "look_at": [0, 0, 0]},
+      "materials": {"m": {"type": "lambert", "albedo": 0.6}},
+      "objects": [{"name": "floor", "shape": {"type": "plane", "size": [8, 8]}, "material": "m"})" +
+           objects + R"(],
+      "lights": [)" +
+           light + R"(],
+      "media": [{"sigma_s": 0.08, "sigma_a": 0.01, "g": 0.3,
+                 "bounds": {"box": {"min": [-4, -4, 0], "max": [4, 4, 4]}}}]})";
+}
+
 // An impulse bake at 1 texel per unit without probes: the vertex correction field's tests.
 std::unique_ptr<LightmapBaker> bake_field(const Fixture& f, int spp) {
     BakeSettings s;
@@ -722,16 +738,11 @@ TEST(Bake, VertexCorrectionFieldDoesNotLeakThroughWallsCrossingItsTexels) {
             quad({-s, -s, 0}, {s, -s, 0}, {s, -s, h}, {-s, -s, h}, inward);  // -y
         }
     }
-    Fixture f(R"({"frames": 1, "camera": {"position": [0, -9, 5], "look_at": [0, 0, 0]},
-      "materials": {"m": {"type": "lambert", "albedo": 0.6}},
-      "objects": [{"name": "floor", "shape": {"type": "plane", "size": [8, 8]}, "material": "m"},
+    Fixture f(fog_floor_scene(R"(,
                   {"name": "canopy", "shape": {"type": "plane", "size": [5, 5]}, "material": "m",
                    "transform": {"translate": [0, 0, 1.5], "rotate": {"axis": [1, 0, 0], "deg": 180}}},
                   {"name": "walls", "mesh": ")" +
-              obj.string() + R"(", "material": "m", "lightmap": false}],
-      "lights": [{"type": "directional", "direction": [0.3, 0.2, -1], "irradiance": 3}],
-      "media": [{"sigma_s": 0.08, "sigma_a": 0.01, "g": 0.3,
-                 "bounds": {"box": {"min": [-4, -4, 0], "max": [4, 4, 4]}}}]})");
+                              obj.string() + R"(", "material": "m", "lightmap": false})"));
     const std::unique_ptr<LightmapBaker> baker = bake_field(f, 16);
     const VertexCorrectionField* field = baker->vertex_corrections();
     ASSERT_NE(field, nullptr);
@@ -764,15 +775,11 @@ TEST(Bake, VertexCorrectionFieldDoesNotLeakThroughWallsCrossingItsTexels) {
 // is. And a field texel keeps the shadows of its point and directional lights: a hit shadowed
 // otherwise does not read it.
 TEST(Bake, VertexCorrectionFieldIsNotReadInAGapUnderALid) {
-    Fixture f(R"({"frames": 1, "camera": {"position": [0, -9, 5], "look_at": [0, 0, 0]},
-      "materials": {"m": {"type": "lambert", "albedo": 0.6}},
-      "objects": [{"name": "floor", "shape": {"type": "plane", "size": [8, 8]}, "material": "m"},
+    Fixture f(fog_floor_scene(R"(,
                   {"name": "lid", "shape": {"type": "plane", "size": [5.3, 8]}, "material": "m",
                    "transform": {"translate": [-1.35, 0, 0.02],
-                                 "rotate": {"axis": [1, 0, 0], "deg": 180}}}],
-      "lights": [{"type": "point", "position": [3, 0, 2], "intensity": 20}],
-      "media": [{"sigma_s": 0.08, "sigma_a": 0.01, "g": 0.3,
-                 "bounds": {"box": {"min": [-4, -4, 0], "max": [4, 4, 4]}}}]})");
+                                 "rotate": {"axis": [1, 0, 0], "deg": 180}}})",
+                              R"({"type": "point", "position": [3, 0, 2], "intensity": 20})"));
     const std::unique_ptr<LightmapBaker> baker = bake_field(f, 4);
     const VertexCorrectionField* field = baker->vertex_corrections();
     ASSERT_NE(field, nullptr);
@@ -796,9 +803,7 @@ TEST(Bake, VertexCorrectionFieldIsNotReadInAGapUnderALid) {
 // plane. The ray now runs from the hit itself to the lifted centre and on past it: a centre on
 // a wall is read from neither side, a clear one from its own side only.
 TEST(Bake, VertexCorrectionFieldIsNotReadAcrossAWallOnTheTexelCentre) {
-    Fixture f(R"({"frames": 1, "camera": {"position": [0, -9, 5], "look_at": [0, 0, 0]},
-      "materials": {"m": {"type": "lambert", "albedo": 0.6}},
-      "objects": [{"name": "floor", "shape": {"type": "plane", "size": [8, 8]}, "material": "m"},
+    Fixture f(fog_floor_scene(R"(,
                   {"name": "wall", "shape": {"type": "plane", "size": [1, 8]}, "material": "m",
                    "lightmap": false, "transform": {"translate": [1.5, 0, 0.5],
                                                     "rotate": {"axis": [0, 1, 0], "deg": -90}}},
@@ -808,10 +813,7 @@ TEST(Bake, VertexCorrectionFieldIsNotReadAcrossAWallOnTheTexelCentre) {
                   {"name": "partition", "shape": {"type": "plane", "size": [2, 1]},
                    "material": "m", "lightmap": false,
                    "transform": {"translate": [2, 0.8, 0.5],
-                                 "rotate": {"axis": [1, 0, 0], "deg": 90}}}],
-      "lights": [{"type": "directional", "direction": [0.3, 0.2, -1], "irradiance": 3}],
-      "media": [{"sigma_s": 0.08, "sigma_a": 0.01, "g": 0.3,
-                 "bounds": {"box": {"min": [-4, -4, 0], "max": [4, 4, 4]}}}]})");
+                                 "rotate": {"axis": [1, 0, 0], "deg": 90}}})"));
     const std::unique_ptr<LightmapBaker> baker = bake_field(f, 4);
     const VertexCorrectionField* field = baker->vertex_corrections();
     ASSERT_NE(field, nullptr);
@@ -842,14 +844,9 @@ TEST(Bake, VertexCorrectionFieldIsNotReadAcrossAWallOnTheTexelCentre) {
 // the bake's relMSE 2.11 -> 1.89). A hit whose nearest texel is not valid reads no field: it
 // keeps its tables, as on an object without a lightmap.
 TEST(Bake, VertexCorrectionFieldIsReadOnValidTexelsOnly) {
-    Fixture f(R"({"frames": 1, "camera": {"position": [0, -9, 5], "look_at": [0, 0, 0]},
-      "materials": {"m": {"type": "lambert", "albedo": 0.6}},
-      "objects": [{"name": "floor", "shape": {"type": "plane", "size": [8, 8]}, "material": "m"},
+    Fixture f(fog_floor_scene(R"(,
                   {"name": "crate", "shape": {"type": "box", "size": [4, 4, 2]}, "material": "m",
-                   "lightmap": false, "transform": {"translate": [0, 0, 0.95]}}],
-      "lights": [{"type": "directional", "direction": [0.3, 0.2, -1], "irradiance": 3}],
-      "media": [{"sigma_s": 0.08, "sigma_a": 0.01, "g": 0.3,
-                 "bounds": {"box": {"min": [-4, -4, 0], "max": [4, 4, 4]}}}]})");
+                   "lightmap": false, "transform": {"translate": [0, 0, 0.95]}})"));
     const std::unique_ptr<LightmapBaker> baker = bake_field(f, 4);
     const VertexCorrectionField* field = baker->vertex_corrections();
     ASSERT_NE(field, nullptr);
@@ -885,16 +882,13 @@ TEST(Bake, VertexCorrectionFieldIsReadOnValidTexelsOnly) {
 // texel's own tables by their ratio (-0.006 here; VPT at 512 spp: under the lid 0.0001, open
 // 0.271; impulse's open floor 0.261 with the ratio, 0.286 without).
 TEST(Bake, SingleCorrectionsTravelWithTheTablesOfTheirConnections) {
-    Fixture f(R"({"frames": 1, "camera": {"position": [0, -9, 5], "look_at": [0, 0, 0]},
-      "materials": {"m": {"type": "lambert", "albedo": 0.6}},
-      "objects": [{"name": "floor", "shape": {"type": "plane", "size": [8, 8]}, "material": "m"},
+    Fixture f(fog_floor_scene(
+        R"(,
                   {"name": "lid", "shape": {"type": "plane", "size": [5.3, 8]}, "material": "m",
                    "lightmap": false,
                    "transform": {"translate": [-1.35, 0, 0.03],
-                                 "rotate": {"axis": [1, 0, 0], "deg": 180}}}],
-      "lights": [{"type": "sky", "sun_direction": [0.45, -0.35, 0.55], "sun_radiance": 0}],
-      "media": [{"sigma_s": 0.08, "sigma_a": 0.01, "g": 0.3,
-                 "bounds": {"box": {"min": [-4, -4, 0], "max": [4, 4, 4]}}}]})");
+                                 "rotate": {"axis": [1, 0, 0], "deg": 180}}})",
+        R"({"type": "sky", "sun_direction": [0.45, -0.35, 0.55], "sun_radiance": 0})"));
     BakeSettings s;
     s.spp = 16;
     s.texel_density = 4.0f;

@@ -52,7 +52,7 @@ struct LightmapTexel {
 };
 
 // How far above a surface point geometry covers it, in texels of its chart: valley's IFC walls
-// stand in layers 0.025 apart (the straddle rays of vertex_corrections.cpp, 0.1 texel high, run
+// stand in layers 0.025 apart (the straddle rays of vertex_corrections.cpp, 0.13 texel high, run
 // past the inner layer), its floors 0.03-0.09 above the terrain.
 constexpr float kTexelCoverReach = 0.25f;
 // Whether geometry lies within `reach` of p along n.

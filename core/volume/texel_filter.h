@@ -6,26 +6,24 @@
 // on its own surface (valid, normals within ~25 degrees, covered alike (lightmap_atlas.h: the
 // ground under a floor apart from the open ground beside it, as in the vertex field's neighbour
 // means), world distance within the window's, so that a neighbouring chart across a gutter
-// never mixes in) and on the same side of every
-// point or directional light's shadow: those terms jump there (the lit medium of an occluded
-// connection stands in for the tables' response plus a correction), their sum with the
-// unfiltered tables' part does not. Last, the texels' unfiltered light (direct and tables,
-// summed at every path) must agree within kTexelFilterLightRatio: a texel in a crack under a
-// box sees little of the medium that lights its open neighbours. Those sums are estimates:
-// their difference may also be within kTexelFilterLightSigmas standard deviations of it (each
-// sum's variance from its paths' squared light; a sum of one path has none) when their
-// scattered light (the tables' part, how much lit medium they see) agrees within the ratio.
-// The first version
-// compared the sums alone, and at dark texels one path of 16 catching a lit wall split them:
-// valley's terrain texels in the gaps under houses were filtered over 1-3 texels, where their
-// walks' rare escapes through the gap weighed 1 / texel_mc_rate alone (1.4 and 2.7 where VPT
-// reads 0.004 and 0.0025). Comparing their scattered light instead (the tables' part, not
-// noisy there) joined them, but also joined the closed cavities of layered walls (no light at
-// all) with the rooms beside them (houses' relMSE x3); the noise alone joined dark texels
-// under houses with noisy neighbours that see the lit medium (house10 texels at 0.26 where VPT
-// reads 0). radius 0 keeps every texel's own
-// estimate (unbiased per texel); a radius trades that for (2 radius + 1)^2 times the samples,
-// with the bias of a box blur of a smooth field.
+// never mixes in) and on the same side of every point or directional light's shadow: those
+// terms jump there (the lit medium of an occluded connection stands in for the tables'
+// response plus a correction), their sum with the unfiltered tables' part does not. Last, the
+// texels' unfiltered light (direct and tables, summed at every path) must agree within
+// kTexelFilterLightRatio: a texel in a crack under a box sees little of the medium that lights its
+// open neighbours. Those sums are estimates: their difference may also be within
+// kTexelFilterLightSigmas standard deviations of it (each sum's variance from its paths' squared
+// light; a sum of one path has none) when their scattered light (the tables' part, how much lit
+// medium they see) agrees within the ratio. The first version compared the sums alone, and at dark
+// texels one path of 16 catching a lit wall split them: valley's terrain texels in the gaps under
+// houses were filtered over 1-3 texels, where their walks' rare escapes through the gap weighed 1 /
+// texel_mc_rate alone (1.4 and 2.7 where VPT reads 0.004 and 0.0025). Comparing their scattered
+// light instead (the tables' part, not noisy there) joined them, but also joined the closed
+// cavities of layered walls (no light at all) with the rooms beside them (houses' relMSE x3); the
+// noise alone joined dark texels under houses with noisy neighbours that see the lit medium
+// (house10 texels at 0.26 where VPT reads 0). radius 0 keeps every texel's own estimate (unbiased
+// per texel); a radius trades that for (2 radius + 1)^2 times the samples, with the bias of a box
+// blur of a smooth field.
 //
 // | parameter | meaning                                                    |
 // |-----------|------------------------------------------------------------|
