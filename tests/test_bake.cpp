@@ -562,6 +562,7 @@ TEST(Bake, TexelFilterAveragesOnlyTheTexelsOwnSurfaceAndShadowSide) {
     a.texel_density = 4.0f;
     const std::vector<ObjectLightmap> maps = build_lightmaps(*f.rays, a);
     ASSERT_EQ(maps.size(), 2u);
+    long full = 0;  // texels whose window is whole
     for (const ObjectLightmap& map : maps) {
         const size_t n = map.texels.size();
         TexelFilterGuide guide;  // without the sums' variance and scattered light
@@ -575,15 +576,21 @@ TEST(Bake, TexelFilterAveragesOnlyTheTexelsOwnSurfaceAndShadowSide) {
             sums[i].single =
                 vec3(t.state == TexelState::Valid ? (guide.shadows[i] ? 10.0f : 1.0f) : 1000.0f);
         }
-        const std::vector<IrradianceParts> out = filter_texel_sums(map, sums, guide, 2);
+        std::vector<int> window;  // what the texel_mc_window layer shows
+        const std::vector<IrradianceParts> out =
+            filter_texel_sums(map, sums, guide, 2, nullptr, &window);
+        ASSERT_EQ(window.size(), n);
         long averaged = 0;
         for (size_t i = 0; i < n; ++i) {
             if (map.texels[i].state != TexelState::Valid) {
                 EXPECT_EQ(out[i].single.x, 0.0f);
+                EXPECT_EQ(window[i], 0);
                 continue;
             }
             EXPECT_FLOAT_EQ(out[i].single.x, sums[i].single.x) << "texel " << i;
             const std::vector<size_t> near = texel_filter_neighbours(map, guide, i, 2);
+            EXPECT_EQ(window[i], int(near.size())) << "texel " << i;
+            full += window[i] == 25;
             averaged += long(near.size());
             for (size_t j : near) {
                 EXPECT_GT(glm::dot(map.texels[j].normal, map.texels[i].normal), 0.9f);
@@ -604,6 +611,7 @@ TEST(Bake, TexelFilterAveragesOnlyTheTexelsOwnSurfaceAndShadowSide) {
             break;
         }
     }
+    EXPECT_GT(full, 0) << "texels amid the floor average the whole 5 x 5 window";
 }
 
 // The light-level test reads the sums as estimates: a sum of 16 paths of which one caught 1.0

@@ -418,9 +418,11 @@ LayerSet LightmapBaker::layers(size_t mi) const {
                                samples_);
         guide.shadows[i] |= share_shadows_[mi][i];
     }
+    const int radius = texel_filter_radius(estimator_);
+    std::vector<int> window;
     const std::vector<IrradianceParts> deferred =
-        filter_texel_sums(map, deferred_sums_[mi], guide, texel_filter_radius(estimator_),
-                          single_sums_[mi].empty() ? nullptr : &single_sums_[mi]);
+        filter_texel_sums(map, deferred_sums_[mi], guide, radius,
+                          single_sums_[mi].empty() ? nullptr : &single_sums_[mi], &window);
     for (size_t i = 0; i < n; ++i) {
         const LightmapTexel& t = map.texels[i];
         if (t.state != TexelState::Valid) continue;
@@ -451,6 +453,21 @@ LayerSet LightmapBaker::layers(size_t mi) const {
                            "texel state: empty, valid, inside geometry (flagged), dilated");
     valid.legend = texel_state_legend();
     for (size_t i = 0; i < n; ++i) valid.data[i] = float(int(states[i]));
+    if (radius > 0) {
+        // Where the Monte Carlo terms rest on few samples: a texel its filter left alone
+        // carries them at weight 1 / rate.
+        Layer& texels = set.add("texel_mc_window", LayerKind::Continuous, 1,
+                                "texels whose Monte Carlo terms the texel's filter averaged "
+                                "(bake.texel_mc_radius; 0: not a valid texel)");
+        Layer& rates = set.add("texel_mc_rate", LayerKind::Continuous, 1,
+                               "the fraction of the texel's paths that ran its Monte Carlo terms "
+                               "(bake.texel_mc_rate, raised where its window is small)");
+        const std::vector<float>* mc = mi < mc_rates_.size() ? &mc_rates_[mi] : nullptr;
+        for (size_t i = 0; i < n; ++i) {
+            texels.data[i] = float(window[i]);
+            rates.data[i] = mc && states[i] == TexelState::Valid ? (*mc)[i] : 0.0f;
+        }
+    }
     return set;
 }
 

@@ -112,18 +112,26 @@ IrradianceParts mean_of_texels(const std::vector<IrradianceParts>& sums,
 std::vector<IrradianceParts> filter_texel_sums(const ObjectLightmap& map,
                                                const std::vector<IrradianceParts>& sums,
                                                const TexelFilterGuide& guide, int radius,
-                                               const std::vector<SingleCorrectionSums>* single) {
-    if (radius <= 0 && !single) return sums;
+                                               const std::vector<SingleCorrectionSums>* single,
+                                               std::vector<int>* window) {
+    if (window) window->assign(sums.size(), 0);
+    if (radius <= 0 && !single) {
+        if (window)
+            for (size_t i = 0; i < sums.size(); ++i)
+                (*window)[i] = map.texels[i].state == TexelState::Valid;
+        return sums;
+    }
     std::vector<IrradianceParts> out(sums.size());
     tbb::parallel_for(size_t(0), sums.size(), [&](size_t i) {
+        const bool valid = map.texels[i].state == TexelState::Valid;
         if (radius <= 0) {
-            out[i] = map.texels[i].state == TexelState::Valid
-                         ? filtered_texel_terms(sums, single, i, {i})
-                         : sums[i];
+            out[i] = valid ? filtered_texel_terms(sums, single, i, {i}) : sums[i];
+            if (window) (*window)[i] = valid;
             return;
         }
-        out[i] =
-            filtered_texel_terms(sums, single, i, texel_filter_neighbours(map, guide, i, radius));
+        const std::vector<size_t> near = texel_filter_neighbours(map, guide, i, radius);
+        out[i] = filtered_texel_terms(sums, single, i, near);
+        if (window) (*window)[i] = int(near.size());
     });
     return out;
 }

@@ -73,11 +73,12 @@ int texel_filter_radius(const BakeEstimator& estimator);
 struct SingleCorrectionSums;
 // The filtered sums, one per texel (invalid texels: zero). sums.size() == map.texels.size().
 // With `single`, each texel's single scattering also gets its ratio_correction over the same
-// window (radius 0: the texel alone).
+// window (radius 0: the texel alone). With `window`, how many texels each one averaged (0 for
+// invalid texels).
 std::vector<IrradianceParts> filter_texel_sums(
     const ObjectLightmap& map, const std::vector<IrradianceParts>& sums,
     const TexelFilterGuide& guide, int radius,
-    const std::vector<SingleCorrectionSums>* single = nullptr);
+    const std::vector<SingleCorrectionSums>* single = nullptr, std::vector<int>* window = nullptr);
 // The mean of sums over the texels `near` (zero when none).
 IrradianceParts mean_of_texels(const std::vector<IrradianceParts>& sums,
                                const std::vector<size_t>& near);

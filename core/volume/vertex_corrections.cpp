@@ -36,27 +36,33 @@ constexpr double kFieldPathFraction = 0.5;
 // short box brought 41.9 against ~0.1).
 template <typename SameSurface>
 void filter_computed(const ObjectLightmap& map, const std::vector<char>& done,
+                     const std::vector<uint32_t>& row, const std::vector<uint32_t>& computed,
                      const TexelFilterGuide& guide, const SameSurface& same_surface,
                      std::vector<IrradianceParts>& deferred,
                      std::vector<UnoccludedSingle>& unoccluded) {
-    std::vector<IrradianceParts> filtered(deferred.size());
-    std::vector<UnoccludedSingle> filtered_unoccluded(unoccluded.size());
-    tbb::parallel_for(size_t(0), deferred.size(), [&](size_t i) {
-        if (!done[i]) return;
+    std::vector<IrradianceParts> filtered(computed.size());
+    std::vector<UnoccludedSingle> filtered_unoccluded(computed.size());
+    tbb::parallel_for(size_t(0), computed.size(), [&](size_t k) {
+        const size_t i = computed[k];
         std::vector<size_t> near = texel_filter_neighbours(map, guide, i, kFieldStride, &done);
         near.erase(std::remove_if(near.begin(), near.end(),
                                   [&](size_t j) { return j != i && !same_surface(i, j); }),
                    near.end());
         if (near.empty()) near.push_back(i);
-        filtered[i] = mean_of_texels(deferred, near);
-        // Sums, not means: the field carries their ratio.
-        for (size_t j : near) filtered_unoccluded[i] += unoccluded[j];
-    });
-    for (size_t i = 0; i < deferred.size(); ++i)
-        if (done[i]) {
-            deferred[i] = filtered[i];
-            unoccluded[i] = filtered_unoccluded[i];
+        for (size_t j : near) {
+            filtered[k] += deferred[row[j]];
+            // Sums, not means: the field carries their ratio.
+            filtered_unoccluded[k] += unoccluded[row[j]];
         }
+        const float inv = 1.0f / float(near.size());
+        filtered[k].surface *= inv;
+        filtered[k].single *= inv;
+        filtered[k].multiple *= inv;
+    });
+    for (size_t k = 0; k < computed.size(); ++k) {
+        deferred[row[computed[k]]] = filtered[k];
+        unoccluded[row[computed[k]]] = filtered_unoccluded[k];
+    }
 }
 
 // Straddle rays run this fraction of a texel above the surface: a wall standing on it blocks
@@ -130,12 +136,18 @@ bool uses_vertex_corrections(BakeMethod method, const BakeSettings& settings,
 }
 
 // One map's prepass: the computed texels' Monte Carlo terms, filtered, and the others' from
-// their sources, with what the packing needs of the texels' geometry.
+// their sources, with what the packing needs of the texels' geometry. Per valid texel (a
+// row; valley's atlases are 80 % gutters and empty texels, whose zeroed entries cost 1.3 GB of
+// fresh pages a bake, 2 CPU-s of the kernel's page clearing), except the filter's guide, which
+// its neighbour tests read by texel.
+constexpr uint32_t kNoRow = ~uint32_t(0);
 struct VertexCorrectionField::MapTerms {
+    std::vector<uint32_t> row;    // per texel: its row, kNoRow where not valid
+    std::vector<uint32_t> texel;  // per row
     std::vector<IrradianceParts> deferred;
     std::vector<UnoccludedSingle> unoccluded;
     std::vector<char> gated, straddles, cover_mixed;
-    TexelFilterGuide guide;
+    TexelFilterGuide guide;  // per texel
 };
 
 VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
@@ -143,14 +155,22 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
     int seed, std::atomic<long>& rays_cast, std::atomic<long>& computed) const {
     const size_t n = map.texels.size();
     MapTerms m;
-    m.deferred.resize(n);
-    m.unoccluded.resize(n);
-    m.gated.assign(n, 0);
-    m.straddles.assign(n, 0);
-    m.cover_mixed.assign(n, 0);
+    m.row.assign(n, kNoRow);
+    for (size_t i = 0; i < n; ++i)
+        if (map.texels[i].state == TexelState::Valid) {
+            m.row[i] = uint32_t(m.texel.size());
+            m.texel.push_back(uint32_t(i));
+        }
+    const size_t rows = m.texel.size();
+    m.deferred.resize(rows);
+    m.unoccluded.resize(rows);
+    m.gated.assign(rows, 0);
+    m.straddles.assign(rows, 0);
+    m.cover_mixed.assign(rows, 0);
     m.guide = TexelFilterGuide::sized(n);
-    std::vector<char> done(n, 0);
-    auto run = [&](size_t i) {
+    std::vector<char> done(n, 0);  // by texel: the filter's `among`
+    auto run = [&](size_t r) {
+        const size_t i = m.texel[r];
         const LightmapTexel& t = map.texels[i];
         BakeCounters counters;
         BakeEstimator::FixedDirect fixed;
@@ -159,21 +179,19 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
         for (int s = 0; s < paths_; ++s) {
             CounterRng rng = texel_random(seed, key, i, s);
             add_texel_path(estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
-                                              &m.deferred[i], -1.0f, &m.unoccluded[i]),
+                                              &m.deferred[r], -1.0f, &m.unoccluded[r]),
                            sum, light_squares);
         }
         set_texel_filter_guide(m.guide, i, fixed, sum, light_squares, paths_);
-        m.gated[i] = fixed.known;  // its lights' shadows known (exact tracking)
+        m.gated[r] = fixed.known;  // its lights' shadows known (exact tracking)
         done[i] = 1;
         rays_cast += counters.rays;
         ++computed;
     };
     const int w = map.width, stride = kFieldStride;
-    auto valid = [&](size_t i) { return map.texels[i].state == TexelState::Valid; };
-    tbb::parallel_for(size_t(0), n, [&](size_t i) {
-        if (!valid(i)) return;
-        m.cover_mixed[i] = cover_mixed(rays, map, i);
-        m.straddles[i] = m.cover_mixed[i] || straddles_geometry(rays, map, i);
+    tbb::parallel_for(size_t(0), rows, [&](size_t r) {
+        m.cover_mixed[r] = cover_mixed(rays, map, m.texel[r]);
+        m.straddles[r] = m.cover_mixed[r] || straddles_geometry(rays, map, m.texel[r]);
     });
     // Neighbours in the atlas stand for a texel when they face its way, are covered as it is
     // and, where geometry crosses either footprint, see it (not the eave's light for the attic
@@ -184,54 +202,69 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
     auto same_surface = [&](size_t i, size_t j) {
         const LightmapTexel &a = map.texels[i], &b = map.texels[j];
         return glm::dot(a.normal, b.normal) > 0.9f && a.covered == b.covered &&
-               (!(m.straddles[i] || m.straddles[j]) ||
+               (!(m.straddles[m.row[i]] || m.straddles[m.row[j]]) ||
                 sees(rays, lifted_centre(map, i), lifted_centre(map, j)));
     };
     // Every stride-th texel in x and y; the others take the mean of those around them on
     // their own surface, or run themselves where none is (a chart's thin strip).
-    tbb::parallel_for(size_t(0), n, [&](size_t i) {
-        if (valid(i) && int(i % size_t(w)) % stride == 0 && int(i / size_t(w)) % stride == 0)
-            run(i);
+    auto on_stride = [&](size_t i) {
+        return int(i % size_t(w)) % stride == 0 && int(i / size_t(w)) % stride == 0;
+    };
+    tbb::parallel_for(size_t(0), rows, [&](size_t r) {
+        if (on_stride(m.texel[r])) run(r);
     });
-    std::vector<std::vector<size_t>> sources(n);
-    std::vector<char> runs_itself(n, 0);
-    tbb::parallel_for(size_t(0), n, [&](size_t i) {
-        if (!valid(i) || done[i]) return;
+    std::vector<std::vector<uint32_t>> sources(rows);  // rows
+    tbb::parallel_for(size_t(0), rows, [&](size_t r) {
+        const size_t i = m.texel[r];
+        if (done[i]) return;
         const int x0 = int(i % size_t(w)), y0 = int(i / size_t(w));
         for (int y = std::max(0, y0 - stride + 1); y <= std::min(map.height - 1, y0 + stride - 1);
              ++y)
             for (int x = std::max(0, x0 - stride + 1); x <= std::min(w - 1, x0 + stride - 1); ++x) {
                 const size_t j = size_t(y) * size_t(w) + size_t(x);
-                if (done[j] && same_surface(i, j)) sources[i].push_back(j);
+                if (done[j] && same_surface(i, j)) sources[r].push_back(m.row[j]);
             }
         // Sources on both sides of a light's shadow: the texel's own side is unknown, so it
         // runs itself (the texels along shadow edges).
-        const bool mixed = std::any_of(sources[i].begin(), sources[i].end(), [&](size_t j) {
-            return m.guide.shadows[j] != m.guide.shadows[sources[i].front()] ||
-                   m.gated[j] != m.gated[sources[i].front()];
+        const size_t first = m.texel[sources[r].empty() ? r : sources[r].front()];
+        const bool mixed = std::any_of(sources[r].begin(), sources[r].end(), [&](uint32_t q) {
+            return m.guide.shadows[m.texel[q]] != m.guide.shadows[first] ||
+                   m.gated[q] != m.gated[m.row[first]];
         });
-        if (mixed) sources[i].clear();
-        runs_itself[i] = sources[i].empty();
+        if (mixed) sources[r].clear();
     });
-    std::vector<size_t> missing;
-    for (size_t i = 0; i < n; ++i)
-        if (runs_itself[i]) missing.push_back(i);
+    std::vector<uint32_t> missing;
+    for (size_t r = 0; r < rows; ++r)
+        if (!done[m.texel[r]] && sources[r].empty()) missing.push_back(uint32_t(r));
     tbb::parallel_for(size_t(0), missing.size(), [&](size_t k) { run(missing[k]); });
-    filter_computed(map, done, m.guide, same_surface, m.deferred, m.unoccluded);
-    for (size_t i = 0; i < n; ++i) {
-        if (sources[i].empty()) continue;
+    std::vector<uint32_t> computed_texels;
+    for (size_t r = 0; r < rows; ++r)
+        if (done[m.texel[r]]) computed_texels.push_back(m.texel[r]);
+    filter_computed(map, done, m.row, computed_texels, m.guide, same_surface, m.deferred,
+                    m.unoccluded);
+    for (size_t r = 0; r < rows; ++r) {
+        if (sources[r].empty()) continue;
         // The sources, all shadowed alike: the texel's value and shadows.
-        m.deferred[i] = mean_of_texels(m.deferred, sources[i]);
-        for (size_t j : sources[i]) m.unoccluded[i] += m.unoccluded[j];
-        m.guide.shadows[i] = m.guide.shadows[sources[i].front()];
-        m.gated[i] = m.gated[sources[i].front()];
+        IrradianceParts mean;
+        for (uint32_t q : sources[r]) {
+            mean += m.deferred[q];
+            m.unoccluded[r] += m.unoccluded[q];
+        }
+        const float inv = 1.0f / float(sources[r].size());
+        mean.surface *= inv;
+        mean.single *= inv;
+        mean.multiple *= inv;
+        m.deferred[r] = mean;
+        const uint32_t first = sources[r].front();
+        m.guide.shadows[m.texel[r]] = m.guide.shadows[m.texel[first]];
+        m.gated[r] = m.gated[first];
     }
     return m;
 }
 
 long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& m, int paths,
                                      PackedMap& packed) {
-    const size_t n = map.texels.size();
+    const size_t n = map.texels.size(), rows = m.texel.size();
     // Per valid texel: the emitters' RGB, the surface light's RGB, the corrections' ratio to
     // the tables' single scattering of the unoccluded connections. Only valid texels are read:
     // a hit whose nearest texel is the ring outside a chart, or inside geometry, keeps its
@@ -239,62 +272,66 @@ long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& 
     // for any hit: valley's hits in the closed cavities of layered IFC walls read lit walls'
     // values there, 10 % of the bake's lm_irradiance relMSE.)
     constexpr size_t kChannels = 9;
-    std::vector<float> v(n * kChannels, 0.0f);
-    std::vector<char> readable(n, 0);
-    for (size_t i = 0; i < n; ++i) {
-        if (map.texels[i].state != TexelState::Valid) continue;
-        const vec3 emitters = (m.deferred[i].single + m.deferred[i].multiple) / float(paths);
-        const vec3 surface = m.deferred[i].surface / float(paths);
+    std::vector<float> v(rows * kChannels, 0.0f);
+    std::vector<char> readable(rows, 0);
+    for (size_t r = 0; r < rows; ++r) {
+        const vec3 emitters = (m.deferred[r].single + m.deferred[r].multiple) / float(paths);
+        const vec3 surface = m.deferred[r].surface / float(paths);
         vec3 ratio(0.0f);
         for (int c = 0; c < 3; ++c)
-            if (m.unoccluded[i].tables[c] > 0.0f)
-                ratio[c] = m.unoccluded[i].correction[c] / m.unoccluded[i].tables[c];
+            if (m.unoccluded[r].tables[c] > 0.0f)
+                ratio[c] = m.unoccluded[r].correction[c] / m.unoccluded[r].tables[c];
         if (!std::isfinite(emitters.x + emitters.y + emitters.z + surface.x + surface.y +
                            surface.z + ratio.x + ratio.y + ratio.z))
             continue;
-        readable[i] = 1;
+        readable[r] = 1;
         for (int c = 0; c < 3; ++c) {
-            v[i * kChannels + size_t(c)] = emitters[c];
-            v[i * kChannels + 3 + size_t(c)] = surface[c];
-            v[i * kChannels + 6 + size_t(c)] = ratio[c];
+            v[r * kChannels + size_t(c)] = emitters[c];
+            v[r * kChannels + 3 + size_t(c)] = surface[c];
+            v[r * kChannels + 6 + size_t(c)] = ratio[c];
         }
     }
     packed.width = map.width;
     packed.height = map.height;
-    for (size_t i = 0; i < n; ++i) {
+    for (size_t r = 0; r < rows; ++r) {
         for (size_t c = 0; c < 6; ++c)
-            packed.scale = std::max(packed.scale, std::abs(v[i * kChannels + c]));
+            packed.scale = std::max(packed.scale, std::abs(v[r * kChannels + c]));
         for (size_t c = 6; c < 9; ++c)
-            packed.ratio_scale = std::max(packed.ratio_scale, std::abs(v[i * kChannels + c]));
+            packed.ratio_scale = std::max(packed.ratio_scale, std::abs(v[r * kChannels + c]));
     }
     const float inv = packed.scale > 0.0f ? 1.0f / packed.scale : 0.0f;
     const float inv_ratio = packed.ratio_scale > 0.0f ? 1.0f / packed.ratio_scale : 0.0f;
-    packed.halves.resize(n * kHalvesPerTexel);
+    packed.halves.clear();
+    packed.halves.reserve(rows * kHalvesPerTexel);
     packed.straddles.assign((n + 63) / 64, {});
     long straddling = 0;
-    for (size_t i = 0; i < n; ++i) {
-        if (!readable[i]) continue;
+    for (size_t r = 0; r < rows; ++r) {
+        if (!readable[r]) continue;
+        const size_t i = m.texel[r];
         packed.straddles[i / 64].readable |= uint64_t(1) << (i % 64);
-        uint16_t* h = &packed.halves[i * kHalvesPerTexel];
+        uint16_t h[kHalvesPerTexel];
         for (size_t c = 0; c < kChannels; ++c)
-            h[c] = glm::packHalf1x16(v[i * kChannels + c] * (c < 6 ? inv : inv_ratio));
+            h[c] = glm::packHalf1x16(v[r * kChannels + c] * (c < 6 ? inv : inv_ratio));
         // The shadows of the texel's point and directional lights, where known (exact
         // tracking).
         for (int w16 = 0; w16 < 4; ++w16)
-            h[9 + w16] = m.gated[i] ? uint16_t(m.guide.shadows[i] >> (16 * w16)) : 0;
-        h[13] = m.gated[i] ? 1 : 0;
-        if (m.straddles[i]) {
+            h[9 + w16] = m.gated[r] ? uint16_t(m.guide.shadows[i] >> (16 * w16)) : 0;
+        h[13] = m.gated[r] ? 1 : 0;
+        packed.halves.insert(packed.halves.end(), h, h + kHalvesPerTexel);
+        if (m.straddles[r]) {
             packed.straddles[i / 64].bits |= uint64_t(1) << (i % 64);
-            const bool mixed = m.cover_mixed[i];
+            const bool mixed = m.cover_mixed[r];
             packed.centres.push_back({uint32_t(i), lifted_centre(map, i), straddle_lift(map, i),
                                       mixed, mixed && map.texels[i].covered});
             ++straddling;
         }
     }
-    uint32_t before = 0;
+    uint32_t before = 0, readable_before = 0;
     for (PackedMap::StraddleWord& w : packed.straddles) {
         w.before = before;
+        w.readable_before = readable_before;
         before += uint32_t(__builtin_popcountll(w.bits));
+        readable_before += uint32_t(__builtin_popcountll(w.readable));
     }
     return straddling;
 }
@@ -385,7 +422,7 @@ VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit
         if (rays) *rays += cast;
         if (!read) return texel;
     }
-    texel.halves_ = map.halves.data() + k * kHalvesPerTexel;
+    texel.halves_ = map.halves.data() + map.rank(word, k) * kHalvesPerTexel;
     texel.scale_ = map.scale;
     texel.ratio_scale_ = map.ratio_scale;
     texel.surface_light_ = surface_light_;
@@ -395,8 +432,14 @@ VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit
 
 VertexCorrectionField::Texel VertexCorrectionField::at_texel(size_t map, size_t texel) const {
     Texel t;
-    if (map >= packed_.size() || texel * kHalvesPerTexel >= packed_[map].halves.size()) return t;
-    t.halves_ = packed_[map].halves.data() + texel * kHalvesPerTexel;
+    // Not read by any hit (not valid, or not finite): what a hit there adds, nothing.
+    static const uint16_t kNothing[kHalvesPerTexel] = {};
+    t.halves_ = kNothing;
+    if (map >= packed_.size() || texel >= size_t(packed_[map].width) * packed_[map].height)
+        return t;
+    const PackedMap::StraddleWord& word = packed_[map].straddles[texel / 64];
+    if (word.readable >> (texel % 64) & 1)
+        t.halves_ = packed_[map].halves.data() + packed_[map].rank(word, texel) * kHalvesPerTexel;
     t.scale_ = packed_[map].scale;
     t.ratio_scale_ = packed_[map].ratio_scale;
     t.surface_light_ = surface_light_;

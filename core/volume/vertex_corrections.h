@@ -126,13 +126,13 @@ class VertexCorrectionField {
     static constexpr int kSeveralPages = -2;
     std::vector<int> map_of_object_;
     LightmapLookup lookup_;
-    // Per map, per valid texel (zero elsewhere): RGB of the emitters' terms, then RGB of
-    // the surface light's, as half floats of value / scale (scale: the map's largest |value|,
-    // so nothing overflows; relative precision 2^-11). A lookup is one random read, a cache
-    // miss at 24 bytes a texel: 8 % of a smoke_room impulse bake, against ~2 % at 12 (28 now: the
-    // ratio and the shadows joined in session 28). A texel crossed by geometry: its centre lifted
-    // off the surface by `lift` (the visibility ray from a hit runs from the hit to it and half
-    // a lift on).
+    // Per map, per readable texel (valid, its terms finite; `rank` finds its entry): RGB of the
+    // emitters' terms, then RGB of the surface light's, as half floats of value / scale (scale: the
+    // map's largest |value|, so nothing overflows; relative precision 2^-11). A lookup is one
+    // random read, a cache miss at 24 bytes a texel: 8 % of a smoke_room impulse bake, against ~2 %
+    // at 12 (28 now: the ratio and the shadows joined in session 28). A texel crossed by geometry:
+    // its centre lifted off the surface by `lift` (the visibility ray from a hit runs from the hit
+    // to it and half a lift on).
     struct StraddlingTexel {
         uint32_t texel;
         vec3 lifted_centre;
@@ -146,18 +146,25 @@ class VertexCorrectionField {
     struct PackedMap {
         int width = 0, height = 0;
         float scale = 0.0f, ratio_scale = 0.0f;
-        std::vector<uint16_t> halves;
+        std::vector<uint16_t> halves;  // readable texels only, in texel order
         // Texels crossed by geometry: a bit each, 64 to a word, beside the number of straddling
         // texels in the words before it (the rank of a texel's entry in `centres`, which are
         // in texel order). One cache line answers both: a binary search over the centres was
         // 19 dependent misses on valley's houses (0.9 s of a 50 s bake). `readable`: the
         // texels a hit reads (valid, with a finite value).
+        // `readable_before`: the readable texels in the words before it, the rank of a
+        // readable texel's entry in `halves` (which holds readable texels only).
         struct StraddleWord {
             uint64_t bits = 0, readable = 0;
-            uint32_t before = 0;
+            uint32_t before = 0, readable_before = 0;
         };
         std::vector<StraddleWord> straddles;
         std::vector<StraddlingTexel> centres;
+        // The entry of readable texel k (whose word is `word`) in `halves`.
+        static size_t rank(const StraddleWord& word, size_t k) {
+            const uint64_t below = word.readable & ((uint64_t(1) << (k % 64)) - 1);
+            return word.readable_before + size_t(__builtin_popcountll(below));
+        }
     };
     std::vector<PackedMap> packed_;
     // The prepass of one map (its texels' terms) and their packing (returns the valid
