@@ -162,6 +162,56 @@ json error_over_lightmaps(const json& maps) {
 }
 
 // Every method's mean estimate at one texel, side by side (same samples count, same keys).
+// The texel's own paths as the bake ran them: each path's estimate, and on the paths that ran
+// the Monte Carlo terms what each term brought (x the path's weight 1 / rate in the sum).
+void print_texel_paths(const Scene& scene, const TexelFilterUse& use) {
+    if (use.paths.empty()) return;
+    auto parts = [](const IrradianceParts& p) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "%.4g / %.4g / %.4g", double(luminance(p.surface)),
+                      double(luminance(p.single)), double(luminance(p.multiple)));
+        return std::string(buf);
+    };
+    std::printf("  the texel's paths (surface / single / multiple, luminance):\n");
+    int quiet = 0;
+    for (size_t s = 0; s < use.paths.size(); ++s) {
+        const TexelPathRecord& r = use.paths[s];
+        if (!r.mc_ran) {
+            ++quiet;
+            continue;
+        }
+        std::printf("    path %zu: %s; Monte Carlo terms ran, weight %g, deferred %s\n", s,
+                    parts(r.path).c_str(), double(r.mc_weight), parts(r.deferred).c_str());
+        for (const TexelPathRecord::Term& t : r.terms) {
+            const Light& light = scene.lights.at(size_t(t.light));
+            std::printf("      light %d (%s) %s, roulette weight %.3g: %s\n", t.light,
+                        to_string(light.type),
+                        t.occluded ? "occluded: lit medium" : "unoccluded: single correction",
+                        double(t.roulette), parts(t.value).c_str());
+        }
+        std::printf("      texel walk (multiple scattering, surface light): %s\n",
+                    parts(r.walk).c_str());
+        if (luminance(r.hidden.total()) != 0.0f)
+            std::printf("      hidden surfaces' light: %s\n", parts(r.hidden).c_str());
+    }
+    if (quiet > 0) {
+        IrradianceParts sum;
+        for (const TexelPathRecord& r : use.paths)
+            if (!r.mc_ran) sum += r.path;
+        std::printf("    %d other paths (no Monte Carlo terms), summed: %s\n", quiet,
+                    parts(sum).c_str());
+    }
+    std::printf(
+        "    sums over %zu paths: unfiltered %s; deferred %s, filtered over %d texel(s) %s; "
+        "single-scattering corrections: %.4g x the texel's tables %.4g\n",
+        use.paths.size(), parts(use.sum).c_str(), parts(use.deferred).c_str(), use.texels,
+        parts(use.filtered).c_str(),
+        luminance(use.tables_single) > 0.0f
+            ? double(luminance(use.ratio_correction) / luminance(use.tables_single))
+            : 0.0,
+        double(luminance(use.tables_single)));
+}
+
 void print_debug_texel(const RayScene& rays, const Media& media, const ImpulseTables* tables,
                        const BakeSettings& settings, const LightmapBaker& baker,
                        const std::string& spec) {
@@ -237,6 +287,7 @@ void print_debug_texel(const RayScene& rays, const Media& media, const ImpulseTa
                 "%d texel(s) within %d of it\n",
                 "", double(filter.mc_rate), 1.0 / double(filter.mc_rate), filter.texels,
                 texel_filter_radius(estimator));
+        if (m == BakeMethod::Impulse) print_texel_paths(scene, filter);
     }
     // The baked method's record of the texel's first path (what the workbench's trace shows).
     CounterRng rng = texel_random(settings.seed, lightmap_index, size_t(y) * map->width + x, 0);

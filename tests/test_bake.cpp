@@ -527,7 +527,7 @@ TEST(Bake, ImpulseTexelEstimateIsTheFilteredBakedTexel) {
     unfiltered.set_vertex_corrections(baker.vertex_corrections());
     // What --debug-texel reports beside it: the texel's own rate and its filter's window.
     const std::vector<float> rates = texel_mc_rates(floor, estimator);
-    int checked = 0, differs_unfiltered = 0, averaged = 0;
+    int checked = 0, differs_unfiltered = 0, averaged = 0, ran_mc = 0;
     for (size_t i = 0; i < floor.texels.size() && checked < 30; i += 5) {
         if (floor.texels[i].state != TexelState::Valid) continue;
         ++checked;
@@ -540,6 +540,27 @@ TEST(Bake, ImpulseTexelEstimateIsTheFilteredBakedTexel) {
         EXPECT_GE(use.texels, 1);
         EXPECT_LE(use.texels, 25);
         averaged += use.texels > 1;
+        // Its paths as the bake ran them: they sum to its sums, and a path's deferred terms
+        // are its recorded terms (the lit medium, the walk) times 1 / rate where they ran.
+        ASSERT_EQ(use.paths.size(), size_t(s.spp));
+        vec3 path_sum(0.0f), deferred_sum(0.0f);
+        for (const TexelPathRecord& r : use.paths) {
+            path_sum += r.path.total();
+            deferred_sum += r.deferred.total();
+            if (!r.mc_ran) {
+                EXPECT_EQ(r.deferred.total(), vec3(0.0f));
+                continue;
+            }
+            ++ran_mc;
+            EXPECT_FLOAT_EQ(r.mc_weight, 1.0f / use.mc_rate);
+            vec3 terms = r.walk.total() + r.hidden.total();
+            for (const TexelPathRecord::Term& t : r.terms)
+                if (t.occluded) terms += t.value.total();
+            EXPECT_NEAR(r.deferred.total().x, terms.x * r.mc_weight,
+                        1e-4f * std::max(1.0f, terms.x * r.mc_weight));
+        }
+        EXPECT_NEAR(path_sum.x, use.sum.total().x, 1e-4f * std::max(1.0f, path_sum.x));
+        EXPECT_NEAR(deferred_sum.x, use.deferred.total().x, 1e-4f * std::max(1.0f, deferred_sum.x));
         const float alone =
             texel_estimate(unfiltered, baker.lightmaps(), 0, i, s.seed, s.spp, &use_alone)
                 .total()
@@ -550,6 +571,7 @@ TEST(Bake, ImpulseTexelEstimateIsTheFilteredBakedTexel) {
     EXPECT_GE(checked, 20);
     EXPECT_GT(differs_unfiltered, checked / 2);
     EXPECT_GT(averaged, checked / 2);
+    EXPECT_GT(ran_mc, checked) << "at rate 0.25 about 2 of 8 paths a texel run the terms";
 }
 
 // The filter of the deferred terms: a constant field stays constant (a box filter of the

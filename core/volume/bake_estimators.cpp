@@ -76,6 +76,22 @@ BakeEstimator::BakeEstimator(const RayScene& scene, const Media& media, const Im
     check_media();
 }
 
+namespace {
+thread_local TexelPathRecord* g_path_record = nullptr;
+}  // namespace
+
+PathRecording::PathRecording(TexelPathRecord* record) : previous_(g_path_record) {
+    g_path_record = record;
+}
+
+PathRecording::~PathRecording() {
+    g_path_record = previous_;
+}
+
+TexelPathRecord* PathRecording::current() {
+    return g_path_record;
+}
+
 void BakeEstimator::check_media() const {
     if (!scatters_) return;
     for (size_t i = 0; i < media_.size(); ++i) {
@@ -481,6 +497,11 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
         mc_here = rng.next_float() < rate;
         mc_weight = 1.0f / rate;
     }
+    TexelPathRecord* record = depth == 0 ? PathRecording::current() : nullptr;
+    if (record) {
+        record->mc_ran = mc_here;
+        record->mc_weight = mc_here ? mc_weight : 0.0f;
+    }
     // Here parts.single holds the tables' single scattering of the unoccluded connections.
     if (unoccluded) unoccluded->tables += parts.single;
     if (keep_multiple) {
@@ -496,6 +517,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
             const float w = emitter_roulette_weight(keep[i], rng);
             if (w == 0.0f) continue;
             IrradianceParts term;
+            vec3 drawn(0.0f);  // the correction drawn (recorded)
             if (occluded[i].occluded) {
                 add_lit_medium(local[i], p, n, occluded[i].multiple, rng, counters, term,
                                walk_here);
@@ -503,6 +525,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
                 const vec3 correction = std::isfinite(local[i].distance)
                                             ? local_single_correction(local[i], p, n, rng, counters)
                                             : single_correction(local[i], p, n, rng, counters);
+                drawn = correction;
                 // Filed apart with the tables' value of their own connection: the field and
                 // the baker's filter carry them as a ratio to it. Added to the tables of every
                 // path, a rare correction weighted 1 / rate (an environment sample through a
@@ -523,6 +546,13 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
             }
             mc.single += term.single * w;
             mc.multiple += term.multiple * w;
+            if (record) {
+                IrradianceParts value = term;
+                if (!occluded[i].occluded) value.single = drawn;
+                value.single *= w;
+                value.multiple *= w;
+                record->terms.push_back({local[i].light, occluded[i].occluded, w, value});
+            }
         }
     }
     buffers[size_t(depth)] = std::move(local);
@@ -531,6 +561,10 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
         const ScatteredSurfaceLight hidden = surface_light_scattered(p, n, rng, counters);
         mc.single += hidden.single;
         mc.multiple += hidden.multiple;
+        if (record) {
+            record->hidden.single = hidden.single;
+            record->hidden.multiple = hidden.multiple;
+        }
     }
     if ((walk_here || surface_walk_here) && mc_here) {
         // Through the real media: VPT's walk from the receiver, ending at the first surface;
@@ -544,7 +578,12 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
                                     : prepass          ? prepass_surface_depth_
                                                        : depth + 1;
         texel.surface_light = &surface_light;
-        mc.multiple += texel_walk_from(p, n, rng, counters, texel).multiple;
+        const vec3 walked = texel_walk_from(p, n, rng, counters, texel).multiple;
+        mc.multiple += walked;
+        if (record) {
+            record->walk = surface_light;
+            record->walk.multiple += walked;
+        }
         // The prepass files surface light under `surface`, where nothing else of the texel's
         // own Monte Carlo terms lands (no indirect segment runs there): the field keeps it apart.
         if (prepass)

@@ -82,6 +82,37 @@ struct IrradianceParts {
     }
 };
 
+// What one path's Monte Carlo terms at the receiver brought, as the bake ran them
+// (--debug-texel): surface_path records them at depth 0 while a PathRecording of the thread
+// is open. Values are before the path's weight 1 / rate and after each emitter's roulette.
+struct TexelPathRecord {
+    bool mc_ran = false;
+    float mc_weight = 0.0f;  // 1 / the rate the path ran them at
+    struct Term {
+        int light = -1;
+        bool occluded = false;  // the lit medium; else the single-scattering correction
+        float roulette = 1.0f;  // the emitter roulette's weight (included in `value`)
+        IrradianceParts value;
+    };
+    std::vector<Term> terms;
+    IrradianceParts walk;      // the texel walk: emitters' multiple scattering and surface light
+    IrradianceParts hidden;    // hidden surfaces' light
+    IrradianceParts path;      // the path's estimate at the texel (without the deferred terms)
+    IrradianceParts deferred;  // what it added to the texel's deferred sum
+};
+// Records the receiver's terms of the paths estimated on this thread while it lives.
+class PathRecording {
+  public:
+    explicit PathRecording(TexelPathRecord* record);
+    ~PathRecording();
+    PathRecording(const PathRecording&) = delete;
+    PathRecording& operator=(const PathRecording&) = delete;
+    static TexelPathRecord* current();
+
+  private:
+    TexelPathRecord* previous_;
+};
+
 struct BakeCounters {
     long rays = 0;             // intersection + occlusion rays
     long impulse_queries = 0;  // table lookups

@@ -382,12 +382,22 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
             BakeEstimator::FixedDirect fixed;
             UnoccludedSingle unoccluded;
             float light_squares = 0.0f;
+            const bool record = filter && j == texel;
             for (int s = 0; s < spp; ++s) {
                 CounterRng rng = texel_random(seed, lightmap, j, s);
-                add_texel_path(
+                TexelPathRecord path;
+                const PathRecording recording(record ? &path : nullptr);
+                const IrradianceParts before = deferred[j];
+                path.path =
                     estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
-                                       &deferred[j], rates[j], files ? &unoccluded : nullptr),
-                    sums[j], light_squares);
+                                       &deferred[j], rates[j], files ? &unoccluded : nullptr);
+                add_texel_path(path.path, sums[j], light_squares);
+                if (!record) continue;
+                path.deferred = deferred[j];
+                path.deferred.surface -= before.surface;
+                path.deferred.single -= before.single;
+                path.deferred.multiple -= before.multiple;
+                filter->paths.push_back(std::move(path));
             }
             if (files) single[j] += unoccluded;
             set_texel_filter_guide(guide, j, fixed, sums[j], light_squares, spp);
@@ -397,7 +407,17 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
     const std::vector<size_t> near =
         filtered ? texel_filter_neighbours(map, guide, texel, radius) : std::vector<size_t>{texel};
     sum += filtered_texel_terms(deferred, files ? &single : nullptr, texel, near);
-    if (filter) *filter = {rates[texel], int(near.size())};
+    if (filter) {
+        filter->mc_rate = rates[texel];
+        filter->texels = int(near.size());
+        filter->sum = sums[texel];
+        filter->deferred = deferred[texel];
+        filter->filtered = mean_of_texels(deferred, near);
+        if (files) {
+            filter->tables_single = single[texel].tables;
+            filter->ratio_correction = ratio_correction(single, texel, near);
+        }
+    }
     const float inv = spp > 0 ? 1.0f / float(spp) : 0.0f;
     sum.surface *= inv;
     sum.single *= inv;

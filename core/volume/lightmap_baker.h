@@ -142,6 +142,12 @@ inline CounterRng texel_random(int seed, size_t lightmap, size_t texel, int samp
 struct TexelFilterUse {
     float mc_rate = 0.0f;
     int texels = 0;
+    // The texel's own paths as the bake ran them (what each one's Monte Carlo terms brought),
+    // its sums, and what the filter made of its deferred terms (its window's mean, with the
+    // single-scattering corrections' ratio over the window times the texel's own tables).
+    std::vector<TexelPathRecord> paths;
+    IrradianceParts sum, deferred, filtered;
+    vec3 tables_single{0.0f}, ratio_correction{0.0f};
 };
 IrradianceParts texel_estimate(const BakeEstimator& estimator,
                                const std::vector<ObjectLightmap>& maps, size_t lightmap,
