@@ -60,6 +60,11 @@ shot bake_tables_panel.png scenes/cornell_fog.json --method impulse --set bake.s
 # The production scene (issue "Method B, part 4"): its lightmapped preview, impulse | VPT.
 shot bake_valley_split_vpt.png scenes/valley.json --method impulse --set bake.quality=low \
      --set bake.texel_density=1 --set frame.width=640 --set frame.height=400 --compare
+# Where impulse's Monte Carlo terms rest on few texels: the texel filter's window (texel_mc_window)
+# over the same preview (walls and the ground under houses: small; open ground: the whole 7 x 7).
+shot bake_valley_mc_window.png scenes/valley.json --method impulse --set bake.quality=low \
+     --set bake.texel_density=1 --set frame.width=640 --set frame.height=400 \
+     --overlay texel_mc_window --inspect 560,330
 # Its time-error plot: bench --study bake at 1 texel/unit (the plot is the study's own PNG).
 study=$(mktemp -d)
 "$bin" bench scenes/valley.json --study bake --set bake.quality=low --set bake.texel_density=1 \

@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace freqlab {
@@ -45,6 +46,15 @@ LayerSet render_lightmap_preview(const RayScene& rs, const CameraPose& pose, int
     valid.legend = texel_state_legend();
     Layer& texel = out.add("lightmap_texel", LayerKind::Continuous, 3,
                            "x, y of the nearest texel and the lightmap's index (-1: none)");
+    // Impulse's bakes: how many texels the nearest texel's Monte Carlo terms were averaged over
+    // (few: they rest on few samples, weighted by 1 / rate).
+    const bool windowed = std::any_of(baked.begin(), baked.end(), [](const LayerSet& l) {
+        return l.find("texel_mc_window") != nullptr;
+    });
+    Layer* window = windowed ? &out.add("texel_mc_window", LayerKind::Continuous, 1,
+                                        "texels the nearest texel's Monte Carlo terms were "
+                                        "averaged over (bake.texel_mc_radius)")
+                             : nullptr;
     const CameraRayGenerator gen(pose, width, height);
     tbb::parallel_for(0, height, [&](int y) {
         for (int x = 0; x < width; ++x) {
@@ -83,6 +93,8 @@ LayerSet render_lightmap_preview(const RayScene& rs, const CameraPose& pose, int
             const int tx = std::clamp(int(uv.x), 0, map.width - 1);
             const int ty = std::clamp(int(uv.y), 0, map.height - 1);
             valid.data[i] = layers.get("texel_valid").data[size_t(ty) * map.width + tx];
+            if (const Layer* w = window ? layers.find("texel_mc_window") : nullptr)
+                window->data[i] = w->data[size_t(ty) * map.width + tx];
             texel.data[i * 3 + 0] = float(tx);
             texel.data[i * 3 + 1] = float(ty);
             texel.data[i * 3 + 2] = float(m);
