@@ -17,6 +17,7 @@
 #include "shared_tables.h"
 #include "volume/impulse_irradiance.h"
 #include "volume/lightmap_baker.h"
+#include "volume/lightmap_preview.h"
 #include "volume/texel_filter.h"
 
 using namespace freqlab;
@@ -572,6 +573,26 @@ TEST(Bake, ImpulseTexelEstimateIsTheFilteredBakedTexel) {
     EXPECT_GT(differs_unfiltered, checked / 2);
     EXPECT_GT(averaged, checked / 2);
     EXPECT_GT(ran_mc, checked) << "at rate 0.25 about 2 of 8 paths a texel run the terms";
+    // The lightmapped preview shows each pixel's nearest texel's window (texel_mc_window).
+    std::vector<LayerSet> all;
+    for (size_t m = 0; m < baker.lightmaps().size(); ++m) all.push_back(baker.layers(m));
+    const LayerSet preview =
+        render_lightmap_preview(*f.rays, f.scene.camera.at(0.0f), 64, 48, baker.lightmaps(), all);
+    const Layer* window = preview.find("texel_mc_window");
+    ASSERT_NE(window, nullptr);
+    const Layer& texel = preview.get("lightmap_texel");
+    int seen = 0;
+    for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 64; ++x) {
+            const int m = int(texel.at(64, x, y, 2));
+            if (m < 0) continue;
+            const ObjectLightmap& map = baker.lightmaps()[size_t(m)];
+            const size_t i =
+                size_t(texel.at(64, x, y, 1)) * size_t(map.width) + size_t(texel.at(64, x, y, 0));
+            EXPECT_EQ(window->at(64, x, y, 0), all[size_t(m)].get("texel_mc_window").data[i]);
+            seen += window->at(64, x, y, 0) > 1.0f;
+        }
+    EXPECT_GT(seen, 100) << "most of the floor's texels average several";
 }
 
 // The filter of the deferred terms: a constant field stays constant (a box filter of the

@@ -6,7 +6,8 @@
 //
 // Layers: color (lm_total, or the unlit preview), lm_irradiance, lm_inscatter (single +
 // multiple irradiance), texel_valid (categorical, nearest texel), lightmap_texel (the texel's
-// x, y and lightmap index; -1 off lightmaps: what the inspector's texel trace needs).
+// x, y and lightmap index; -1 off lightmaps: what the inspector's texel trace needs); with an
+// impulse bake's layers also texel_mc_window (the nearest texel's filter window).
 #pragma once
 
 #include "image/layers.h"

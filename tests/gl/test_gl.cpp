@@ -330,6 +330,7 @@ TEST(GlWorkbench, BakePreviewShowsTheAnalyticIrradiance) {
         EXPECT_NEAR(e.at(160, x, y, 0), 3.14159f, 0.05f * 3.14159f) << x << "," << y;
     }
     EXPECT_EQ(texel.at(160, 80, 40, 2), -1.0f);
+    EXPECT_EQ(L->find("texel_mc_window"), nullptr) << "a surface bake has no Monte Carlo terms";
 }
 
 namespace {
