@@ -4,6 +4,7 @@
 // against a surface bake at equal samples and the error against a reference bake directory.
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -172,6 +173,20 @@ void print_texel_paths(const Scene& scene, const TexelFilterUse& use) {
                       double(luminance(p.single)), double(luminance(p.multiple)));
         return std::string(buf);
     };
+    auto print_bounce = [&](const TexelPathRecord& r) {
+        if (!r.bounce.hit) return;
+        const TexelPathRecord::Bounce& b = r.bounce;
+        const std::string name = b.object >= 0 && size_t(b.object) < scene.objects.size()
+                                     ? scene.objects[size_t(b.object)].name
+                                     : "?";
+        char field[64] = "";
+        if (b.field_read)
+            std::snprintf(field, sizeof field, " (the field added %.4g)",
+                          double(luminance(b.field)));
+        std::printf("      bounce: '%s' at (%.3f, %.3f, %.3f), %.3f away; it gathered %s%s\n",
+                    name.c_str(), b.position.x, b.position.y, b.position.z, double(b.distance),
+                    parts(b.vertex).c_str(), field);
+    };
     std::printf("  the texel's paths (surface / single / multiple, luminance):\n");
     int quiet = 0;
     for (size_t s = 0; s < use.paths.size(); ++s) {
@@ -191,6 +206,7 @@ void print_texel_paths(const Scene& scene, const TexelFilterUse& use) {
         }
         std::printf("      texel walk (multiple scattering, surface light): %s\n",
                     parts(r.walk).c_str());
+        print_bounce(r);
         if (luminance(r.hidden.total()) != 0.0f)
             std::printf("      hidden surfaces' light: %s\n", parts(r.hidden).c_str());
     }
@@ -198,6 +214,17 @@ void print_texel_paths(const Scene& scene, const TexelFilterUse& use) {
         IrradianceParts sum;
         for (const TexelPathRecord& r : use.paths)
             if (!r.mc_ran) sum += r.path;
+        // The bounces that brought the most of those paths' light.
+        std::vector<size_t> order;
+        for (size_t s = 0; s < use.paths.size(); ++s)
+            if (!use.paths[s].mc_ran && use.paths[s].bounce.hit) order.push_back(s);
+        std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+            return luminance(use.paths[a].path.total()) > luminance(use.paths[b].path.total());
+        });
+        for (size_t k = 0; k < std::min<size_t>(order.size(), 3); ++k) {
+            std::printf("    path %zu: %s\n", order[k], parts(use.paths[order[k]].path).c_str());
+            print_bounce(use.paths[order[k]]);
+        }
         std::printf("    %d other paths (no Monte Carlo terms), summed: %s\n", quiet,
                     parts(sum).c_str());
     }

@@ -528,7 +528,7 @@ TEST(Bake, ImpulseTexelEstimateIsTheFilteredBakedTexel) {
     unfiltered.set_vertex_corrections(baker.vertex_corrections());
     // What --debug-texel reports beside it: the texel's own rate and its filter's window.
     const std::vector<float> rates = texel_mc_rates(floor, estimator);
-    int checked = 0, differs_unfiltered = 0, averaged = 0, ran_mc = 0;
+    int checked = 0, differs_unfiltered = 0, averaged = 0, ran_mc = 0, bounces = 0;
     for (size_t i = 0; i < floor.texels.size() && checked < 30; i += 5) {
         if (floor.texels[i].state != TexelState::Valid) continue;
         ++checked;
@@ -548,6 +548,13 @@ TEST(Bake, ImpulseTexelEstimateIsTheFilteredBakedTexel) {
         for (const TexelPathRecord& r : use.paths) {
             path_sum += r.path.total();
             deferred_sum += r.deferred.total();
+            if (r.bounce.hit) {
+                // The indirect segment's vertex, as far from the texel as the ray went.
+                ++bounces;
+                EXPECT_NEAR(r.bounce.distance,
+                            glm::length(r.bounce.position - floor.texels[i].position), 1e-3f);
+                EXPECT_GE(r.bounce.object, 0);
+            }
             if (!r.mc_ran) {
                 EXPECT_EQ(r.deferred.total(), vec3(0.0f));
                 continue;
@@ -573,6 +580,7 @@ TEST(Bake, ImpulseTexelEstimateIsTheFilteredBakedTexel) {
     EXPECT_GT(differs_unfiltered, checked / 2);
     EXPECT_GT(averaged, checked / 2);
     EXPECT_GT(ran_mc, checked) << "at rate 0.25 about 2 of 8 paths a texel run the terms";
+    EXPECT_GT(bounces, 10) << "some of the floor's bounces reach the box (the rest escape)";
     // The lightmapped preview shows each pixel's nearest texel's window (texel_mc_window).
     std::vector<LayerSet> all;
     for (size_t m = 0; m < baker.lightmaps().size(); ++m) all.push_back(baker.layers(m));

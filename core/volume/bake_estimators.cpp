@@ -623,8 +623,18 @@ void BakeEstimator::indirect_segment(const vec3& p, const vec3& n, float albedo_
     // y's deferred Monte Carlo terms travel to p apart from the rest (the response to y's
     // light is linear in it), so that the baker filters them too.
     IrradianceParts sub_deferred;
+    TexelPathRecord* record = depth == 0 ? PathRecording::current() : nullptr;
+    if (record) record->in_bounce = true;
     const IrradianceParts sub = vertex_irradiance(hit, albedo_y, depth + 1, rng, counters,
                                                   deferred ? &sub_deferred : nullptr);
+    if (record) {
+        record->in_bounce = false;
+        record->bounce.hit = true;
+        record->bounce.object = hit.object;
+        record->bounce.position = hit.position;
+        record->bounce.distance = hit.distance;
+        record->bounce.vertex = sub;
+    }
     const vec3 radiance = albedo_y * kInvPi * sub.total();  // L(y -> p), diffuse
     const vec3 radiance_deferred = albedo_y * kInvPi * sub_deferred.total();
     // A vertex that gathered nothing (its emitters hidden, its own path lost) sends nothing to
@@ -686,11 +696,19 @@ IrradianceParts BakeEstimator::vertex_irradiance(const SurfaceHit& hit, const ve
     // shadowed otherwise than the texel (a pocket of a layered wall whose texel's centre sees
     // a lamp) keeps its tables' multiple scattering instead.
     if (field.found()) {
-        if (field.holds_for(single.shadows))
-            parts.single +=
-                field.value(depth < settings_.bounces) + field.single_ratio() * single.tables;
+        const bool holds = field.holds_for(single.shadows);
+        const vec3 added =
+            holds ? field.value(depth < settings_.bounces) + field.single_ratio() * single.tables
+                  : vec3(0.0f);
+        if (holds)
+            parts.single += added;
         else
             parts.multiple += single.left_multiple;
+        TexelPathRecord* record = depth == 1 ? PathRecording::current() : nullptr;
+        if (record && record->in_bounce) {
+            record->bounce.field_read = holds;
+            record->bounce.field = added;
+        }
     }
     return parts;
 }

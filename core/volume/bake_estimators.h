@@ -99,6 +99,18 @@ struct TexelPathRecord {
     IrradianceParts hidden;    // hidden surfaces' light
     IrradianceParts path;      // the path's estimate at the texel (without the deferred terms)
     IrradianceParts deferred;  // what it added to the texel's deferred sum
+    // The texel's indirect segment: where it landed and the irradiance that vertex gathered
+    // (its own path, with the vertex correction field's value where it read one).
+    struct Bounce {
+        bool hit = false;
+        int object = -1;
+        vec3 position{0.0f};
+        float distance = 0.0f;
+        IrradianceParts vertex;
+        bool field_read = false;  // the field held for the vertex (found, same shadows)
+        vec3 field{0.0f};         // what it added (its value and ratio x the vertex's tables)
+    } bounce;
+    bool in_bounce = false;  // the texel's indirect segment is running (its vertex records)
 };
 // Records the receiver's terms of the paths estimated on this thread while it lives.
 class PathRecording {
