@@ -76,22 +76,6 @@ BakeEstimator::BakeEstimator(const RayScene& scene, const Media& media, const Im
     check_media();
 }
 
-namespace {
-thread_local TexelPathRecord* g_path_record = nullptr;
-}  // namespace
-
-PathRecording::PathRecording(TexelPathRecord* record) : previous_(g_path_record) {
-    g_path_record = record;
-}
-
-PathRecording::~PathRecording() {
-    g_path_record = previous_;
-}
-
-TexelPathRecord* PathRecording::current() {
-    return g_path_record;
-}
-
 void BakeEstimator::check_media() const {
     if (!scatters_) return;
     for (size_t i = 0; i < media_.size(); ++i) {

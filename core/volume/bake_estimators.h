@@ -113,15 +113,17 @@ struct TexelPathRecord {
     bool in_bounce = false;  // the texel's indirect segment is running (its vertex records)
 };
 // Records the receiver's terms of the paths estimated on this thread while it lives.
+// (Inline: surface_path asks at every texel path.)
 class PathRecording {
   public:
-    explicit PathRecording(TexelPathRecord* record);
-    ~PathRecording();
+    explicit PathRecording(TexelPathRecord* record) : previous_(active_) { active_ = record; }
+    ~PathRecording() { active_ = previous_; }
     PathRecording(const PathRecording&) = delete;
     PathRecording& operator=(const PathRecording&) = delete;
-    static TexelPathRecord* current();
+    static TexelPathRecord* current() { return active_; }
 
   private:
+    static inline thread_local TexelPathRecord* active_ = nullptr;
     TexelPathRecord* previous_;
 };
 

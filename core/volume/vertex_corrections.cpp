@@ -49,15 +49,10 @@ void filter_computed(const ObjectLightmap& map, const std::vector<char>& done,
                                   [&](size_t j) { return j != i && !same_surface(i, j); }),
                    near.end());
         if (near.empty()) near.push_back(i);
-        for (size_t j : near) {
-            filtered[k] += deferred[row[j]];
-            // Sums, not means: the field carries their ratio.
-            filtered_unoccluded[k] += unoccluded[row[j]];
-        }
-        const float inv = 1.0f / float(near.size());
-        filtered[k].surface *= inv;
-        filtered[k].single *= inv;
-        filtered[k].multiple *= inv;
+        for (size_t& j : near) j = row[j];
+        filtered[k] = mean_of_texels(deferred, near);
+        // Sums, not means: the field carries their ratio.
+        for (size_t q : near) filtered_unoccluded[k] += unoccluded[q];
     });
     for (size_t k = 0; k < computed.size(); ++k) {
         deferred[row[computed[k]]] = filtered[k];
@@ -213,7 +208,7 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
     tbb::parallel_for(size_t(0), rows, [&](size_t r) {
         if (on_stride(m.texel[r])) run(r);
     });
-    std::vector<std::vector<uint32_t>> sources(rows);  // rows
+    std::vector<std::vector<size_t>> sources(rows);  // rows
     tbb::parallel_for(size_t(0), rows, [&](size_t r) {
         const size_t i = m.texel[r];
         if (done[i]) return;
@@ -227,7 +222,7 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
         // Sources on both sides of a light's shadow: the texel's own side is unknown, so it
         // runs itself (the texels along shadow edges).
         const size_t first = m.texel[sources[r].empty() ? r : sources[r].front()];
-        const bool mixed = std::any_of(sources[r].begin(), sources[r].end(), [&](uint32_t q) {
+        const bool mixed = std::any_of(sources[r].begin(), sources[r].end(), [&](size_t q) {
             return m.guide.shadows[m.texel[q]] != m.guide.shadows[first] ||
                    m.gated[q] != m.gated[m.row[first]];
         });
@@ -245,17 +240,9 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
     for (size_t r = 0; r < rows; ++r) {
         if (sources[r].empty()) continue;
         // The sources, all shadowed alike: the texel's value and shadows.
-        IrradianceParts mean;
-        for (uint32_t q : sources[r]) {
-            mean += m.deferred[q];
-            m.unoccluded[r] += m.unoccluded[q];
-        }
-        const float inv = 1.0f / float(sources[r].size());
-        mean.surface *= inv;
-        mean.single *= inv;
-        mean.multiple *= inv;
-        m.deferred[r] = mean;
-        const uint32_t first = sources[r].front();
+        m.deferred[r] = mean_of_texels(m.deferred, sources[r]);
+        for (size_t q : sources[r]) m.unoccluded[r] += m.unoccluded[q];
+        const size_t first = sources[r].front();
         m.guide.shadows[m.texel[r]] = m.guide.shadows[m.texel[first]];
         m.gated[r] = m.gated[first];
     }
@@ -409,8 +396,7 @@ VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit
     const PackedMap::StraddleWord& word = map.straddles[k / 64];
     if (!(word.readable >> (k % 64) & 1)) return texel;
     if (word.bits >> (k % 64) & 1) {
-        const uint64_t below = word.bits & ((uint64_t(1) << (k % 64)) - 1);
-        const StraddlingTexel* it = &map.centres[word.before + size_t(__builtin_popcountll(below))];
+        const StraddlingTexel* it = &map.centres[PackedMap::rank(word.bits, word.before, k)];
         long cast = 1;
         bool read = sees_past(*scene_, spawn_point(hit.position, hit.geometric_normal),
                               it->lifted_centre, it->lift * kStraddleOvershoot);
@@ -422,7 +408,8 @@ VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit
         if (rays) *rays += cast;
         if (!read) return texel;
     }
-    texel.halves_ = map.halves.data() + map.rank(word, k) * kHalvesPerTexel;
+    texel.halves_ = map.halves.data() +
+                    PackedMap::rank(word.readable, word.readable_before, k) * kHalvesPerTexel;
     texel.scale_ = map.scale;
     texel.ratio_scale_ = map.ratio_scale;
     texel.surface_light_ = surface_light_;
@@ -439,7 +426,8 @@ VertexCorrectionField::Texel VertexCorrectionField::at_texel(size_t map, size_t 
         return t;
     const PackedMap::StraddleWord& word = packed_[map].straddles[texel / 64];
     if (word.readable >> (texel % 64) & 1)
-        t.halves_ = packed_[map].halves.data() + packed_[map].rank(word, texel) * kHalvesPerTexel;
+        t.halves_ = packed_[map].halves.data() +
+                    PackedMap::rank(word.readable, word.readable_before, texel) * kHalvesPerTexel;
     t.scale_ = packed_[map].scale;
     t.ratio_scale_ = packed_[map].ratio_scale;
     t.surface_light_ = surface_light_;

@@ -126,13 +126,13 @@ class VertexCorrectionField {
     static constexpr int kSeveralPages = -2;
     std::vector<int> map_of_object_;
     LightmapLookup lookup_;
-    // Per map, per readable texel (valid, its terms finite; `rank` finds its entry): RGB of the
-    // emitters' terms, then RGB of the surface light's, as half floats of value / scale (scale: the
-    // map's largest |value|, so nothing overflows; relative precision 2^-11). A lookup is one
-    // random read, a cache miss at 24 bytes a texel: 8 % of a smoke_room impulse bake, against ~2 %
-    // at 12 (28 now: the ratio and the shadows joined in session 28). A texel crossed by geometry:
-    // its centre lifted off the surface by `lift` (the visibility ray from a hit runs from the hit
-    // to it and half a lift on).
+    // Per map, per readable texel (valid, its terms finite; PackedMap::rank finds its entry): RGB
+    // of the emitters' terms, then RGB of the surface light's, as half floats of value / scale
+    // (scale: the map's largest |value|, so nothing overflows; relative precision 2^-11). A lookup
+    // is one random read, a cache miss at 24 bytes a texel: 8 % of a smoke_room impulse bake,
+    // against ~2 % at 12 (28 now: the ratio and the shadows joined in session 28). A texel crossed
+    // by geometry: its centre lifted off the surface by `lift` (the visibility ray from a hit runs
+    // from the hit to it and half a lift on).
     struct StraddlingTexel {
         uint32_t texel;
         vec3 lifted_centre;
@@ -160,10 +160,11 @@ class VertexCorrectionField {
         };
         std::vector<StraddleWord> straddles;
         std::vector<StraddlingTexel> centres;
-        // The entry of readable texel k (whose word is `word`) in `halves`.
-        static size_t rank(const StraddleWord& word, size_t k) {
-            const uint64_t below = word.readable & ((uint64_t(1) << (k % 64)) - 1);
-            return word.readable_before + size_t(__builtin_popcountll(below));
+        // Texel k's entry among those flagged in `bits` (its word's; `before` flagged in the
+        // words before it): in `centres` by bits / before, in `halves` by readable /
+        // readable_before.
+        static size_t rank(uint64_t bits, uint32_t before, size_t k) {
+            return before + size_t(__builtin_popcountll(bits & ((uint64_t(1) << (k % 64)) - 1)));
         }
     };
     std::vector<PackedMap> packed_;
