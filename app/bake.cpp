@@ -179,10 +179,11 @@ void print_texel_paths(const Scene& scene, const TexelFilterUse& use) {
         const std::string name = b.object >= 0 && size_t(b.object) < scene.objects.size()
                                      ? scene.objects[size_t(b.object)].name
                                      : "?";
-        char field[64] = "";
+        char field[96] = "";
         if (b.field_read)
-            std::snprintf(field, sizeof field, " (the field added %.4g)",
-                          double(luminance(b.field)));
+            std::snprintf(
+                field, sizeof field, " (the field added %.4g%s)", double(luminance(b.field)),
+                b.drew_corrections ? "; no ratio there: it drew its own corrections" : "");
         std::printf("      bounce: '%s' at (%.3f, %.3f, %.3f), %.3f away; it gathered %s%s\n",
                     name.c_str(), b.position.x, b.position.y, b.position.z, double(b.distance),
                     parts(b.vertex).c_str(), field);

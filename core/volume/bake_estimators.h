@@ -107,8 +107,9 @@ struct TexelPathRecord {
         vec3 position{0.0f};
         float distance = 0.0f;
         IrradianceParts vertex;
-        bool field_read = false;  // the field held for the vertex (found, same shadows)
-        vec3 field{0.0f};         // what it added (its value and ratio x the vertex's tables)
+        bool field_read = false;        // the field held for the vertex (found, same shadows)
+        bool drew_corrections = false;  // the field had no ratio: the vertex drew its own
+        vec3 field{0.0f};               // what it added (its value and ratio x the vertex's tables)
     } bounce;
     bool in_bounce = false;  // the texel's indirect segment is running (its vertex records)
 };
@@ -155,6 +156,9 @@ struct UnoccludedSingle {
     uint64_t shadows = 0;
     vec3 left_multiple{0.0f};
     vec3 paired_tables{0.0f};
+    // Set by a deeper vertex whose field texel has no ratio (its prepass met no unoccluded
+    // connection): the vertex draws its unoccluded connections' corrections itself.
+    bool draw_corrections = false;
     UnoccludedSingle& operator+=(const UnoccludedSingle& o) {
         tables += o.tables;
         correction += o.correction;

@@ -91,6 +91,9 @@ class VertexCorrectionField {
         // The corrections of the unoccluded connections over the tables' single scattering of
         // them (UnoccludedSingle): the vertex adds this times its own tables' value.
         vec3 single_ratio() const;
+        // Whether the texel's prepass met an unoccluded connection, so that it has a ratio to
+        // lend (read with the texel's location: known before the vertex's path runs).
+        bool single_ratio_known() const { return ratio_known_; }
         // Whether the value holds for a point that sees the point and directional lights of
         // `shadows` occluded (a bit each): the texel's own (any where they are not known:
         // ratio tracking).
@@ -100,7 +103,7 @@ class VertexCorrectionField {
         friend class VertexCorrectionField;
         const uint16_t* halves_ = nullptr;
         float scale_ = 0.0f, ratio_scale_ = 0.0f;
-        bool surface_light_ = false;
+        bool surface_light_ = false, ratio_known_ = true;
     };
     // `rays`: where given, counts the visibility rays the lookup casts (a straddling texel's).
     Texel locate(const SurfaceHit& hit, long* rays = nullptr) const;
@@ -153,9 +156,11 @@ class VertexCorrectionField {
         // 19 dependent misses on valley's houses (0.9 s of a 50 s bake). `readable`: the
         // texels a hit reads (valid, with a finite value).
         // `readable_before`: the readable texels in the words before it, the rank of a
-        // readable texel's entry in `halves` (which holds readable texels only).
+        // readable texel's entry in `halves` (which holds readable texels only). `no_ratio`:
+        // readable texels without a single-scattering ratio (in the same line as the others:
+        // a vertex must know it before its path runs, and the texel's halves are a miss).
         struct StraddleWord {
-            uint64_t bits = 0, readable = 0;
+            uint64_t bits = 0, readable = 0, no_ratio = 0;
             uint32_t before = 0, readable_before = 0;
         };
         std::vector<StraddleWord> straddles;
