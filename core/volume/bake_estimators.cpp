@@ -492,13 +492,6 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     }
     // Here parts.single holds the tables' single scattering of the unoccluded connections.
     if (unoccluded) unoccluded->tables += parts.single;
-    // (A texel's ratio needs a pair.) Valley (low, seed 0): the terrain's darkest texels (under
-    // houses and crates, VPT < 5e-4) read 8.9x VPT's single scattering, 2.0x paired; the
-    // terrain's share of the bake's relMSE 0.135 -> 0.079, for a correction a texel.
-    if (!mc_here && fixed && !fixed->paired && unoccluded && !prepass && depth == 0 &&
-        settings_.single_correction)
-        fixed->paired =
-            pair_first_correction(local, occluded, p, n, albedo_lum, rng, counters, *unoccluded);
     if (keep_multiple) {
         unoccluded->left_multiple = parts.multiple;
         parts.multiple = vec3(0.0f);

@@ -201,9 +201,6 @@ class BakeEstimator {
         // Impulse: the point and directional lights whose connection is occluded, and how;
         // their Monte Carlo terms draw random numbers, so they run on every path.
         std::vector<std::pair<int, OccludedConnection>> occluded;
-        // Impulse: a single-scattering correction of this point's was paired with its tables
-        // (pair_first_correction).
-        bool paired = false;
     };
     // Irradiance at p (normal n, albedo of the receiver for back-scatter): one path. `fixed`,
     // when given, is this point's FixedDirect, filled by the first call. `deferred`, when
@@ -380,15 +377,6 @@ class BakeEstimator {
     // emitter's keep probability at a vertex (1 for a vertex with one term).
     static float emitter_strength(const EmitterSample& s);
     bool has_mc_term(const EmitterSample& s, const OccludedConnection& c, const vec3& n) const;
-    // On a path without Monte Carlo terms at a texel none of whose paths paired one yet: the
-    // first unoccluded connection with tables' single scattering draws its correction, filed
-    // with those tables at weight 1 (the ratio texel_filter.h applies needs a pair; without
-    // one the texel kept the tables of its rare connections through gaps whole). True once
-    // paired.
-    bool pair_first_correction(const std::vector<EmitterSample>& emitters,
-                               const std::vector<OccludedConnection>& occluded, const vec3& p,
-                               const vec3& n, float albedo_lum, CounterRng& rng,
-                               BakeCounters& counters, UnoccludedSingle& unoccluded) const;
     // Each emitter's keep probability over those has(i) picks (the rest keep 1).
     template <class Has>
     void emitter_keep(const std::vector<EmitterSample>& emitters, Has has,

@@ -65,25 +65,6 @@ bool BakeEstimator::has_mc_term(const EmitterSample& s, const OccludedConnection
     return c.occluded || (settings_.single_correction && glm::dot(n, s.dir) > 0.0f);
 }
 
-bool BakeEstimator::pair_first_correction(const std::vector<EmitterSample>& emitters,
-                                          const std::vector<OccludedConnection>& occluded,
-                                          const vec3& p, const vec3& n, float albedo_lum,
-                                          CounterRng& rng, BakeCounters& counters,
-                                          UnoccludedSingle& unoccluded) const {
-    for (size_t i = 0; i < occluded.size(); ++i) {
-        const EmitterSample& s = emitters[i];
-        if (occluded[i].occluded || !has_mc_term(s, occluded[i], n)) continue;
-        const vec3 tables = unoccluded_scatter(s, p, n, albedo_lum, rng, counters).single;
-        if (!(luminance(tables) > 0.0f)) continue;
-        unoccluded.paired_tables += tables;
-        unoccluded.correction += std::isfinite(s.distance)
-                                     ? local_single_correction(s, p, n, rng, counters)
-                                     : single_correction(s, p, n, rng, counters);
-        return true;
-    }
-    return false;
-}
-
 std::vector<float> BakeEstimator::mc_keep(const std::vector<EmitterSample>& emitters,
                                           const std::vector<OccludedConnection>& occluded,
                                           const vec3& n) const {
