@@ -751,6 +751,17 @@ SurfaceHit floor_hit(const Fixture& f, float x, float y, float from_z) {
     return hit;
 }
 
+// The floor under a lid (no lightmap) `height` above it, covering x < 1.3, lit by a sky.
+std::string sky_lid_scene(float height) {
+    return fog_floor_scene(
+        R"(,
+                  {"name": "lid", "shape": {"type": "plane", "size": [5.3, 8]}, "material": "m",
+                   "lightmap": false,
+                   "transform": {"translate": [-1.35, 0, )" +
+            std::to_string(height) + R"(], "rotate": {"axis": [1, 0, 0], "deg": 180}}})",
+        R"({"type": "sky", "sun_direction": [0.45, -0.35, 0.55], "sun_radiance": 0})");
+}
+
 // The texel of `map` that `hit` lands in (the field's nearest-texel rule).
 const LightmapTexel& texel_at(const Fixture& f, const ObjectLightmap& map, const SurfaceHit& hit) {
     vec2 uv;
@@ -941,13 +952,7 @@ TEST(Bake, VertexCorrectionFieldIsReadOnValidTexelsOnly) {
 // texel's own tables by their ratio (-0.006 here; VPT at 512 spp: under the lid 0.0001, open
 // 0.271; impulse's open floor 0.261 with the ratio, 0.286 without).
 TEST(Bake, SingleCorrectionsTravelWithTheTablesOfTheirConnections) {
-    Fixture f(fog_floor_scene(
-        R"(,
-                  {"name": "lid", "shape": {"type": "plane", "size": [5.3, 8]}, "material": "m",
-                   "lightmap": false,
-                   "transform": {"translate": [-1.35, 0, 0.03],
-                                 "rotate": {"axis": [1, 0, 0], "deg": 180}}})",
-        R"({"type": "sky", "sun_direction": [0.45, -0.35, 0.55], "sun_radiance": 0})"));
+    Fixture f(sky_lid_scene(0.03f));
     BakeSettings s;
     s.spp = 16;
     s.texel_density = 4.0f;
@@ -986,13 +991,7 @@ TEST(Bake, SingleCorrectionsTravelWithTheTablesOfTheirConnections) {
 // draws its own corrections: the lid's underside, whose paths bounce off that floor, agrees
 // with VPT.
 TEST(Bake, AVertexWhoseFieldTexelHasNoRatioDrawsItsOwnCorrections) {
-    Fixture f(fog_floor_scene(
-        R"(,
-                  {"name": "lid", "shape": {"type": "plane", "size": [5.3, 8]}, "material": "m",
-                   "lightmap": false,
-                   "transform": {"translate": [-1.35, 0, 0.1],
-                                 "rotate": {"axis": [1, 0, 0], "deg": 180}}})",
-        R"({"type": "sky", "sun_direction": [0.45, -0.35, 0.55], "sun_radiance": 0})"));
+    Fixture f(sky_lid_scene(0.1f));
     const std::unique_ptr<LightmapBaker> baker = bake_field(f, 4);
     const VertexCorrectionField* field = baker->vertex_corrections();
     ASSERT_NE(field, nullptr);
