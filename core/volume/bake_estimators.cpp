@@ -453,9 +453,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
                                            no_multiple && !keep_multiple);
             if (!seen && s.fixed && unoccluded) unoccluded->shadows |= shadow_bit(s.light);
             if (seen && unoccluded && unoccluded->draw_corrections)
-                parts.single += std::isfinite(s.distance)
-                                    ? local_single_correction(s, p, n, rng, counters)
-                                    : single_correction(s, p, n, rng, counters);
+                parts.single += connection_single_correction(s, p, n, rng, counters);
             if (!seen && lit_here) occluded[i] = c;
         } else if (learn) {
             if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, want, no_multiple) &&
@@ -510,9 +508,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
                 add_lit_medium(local[i], p, n, occluded[i].multiple, rng, counters, term,
                                walk_here);
             } else {
-                const vec3 correction = std::isfinite(local[i].distance)
-                                            ? local_single_correction(local[i], p, n, rng, counters)
-                                            : single_correction(local[i], p, n, rng, counters);
+                const vec3 correction = connection_single_correction(local[i], p, n, rng, counters);
                 drawn = correction;
                 // Filed apart with the tables' value of their own connection: the field and
                 // the baker's filter carry them as a ratio to it. Added to the tables of every

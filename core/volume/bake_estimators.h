@@ -303,6 +303,12 @@ class BakeEstimator {
     // The same for a point or area emitter sample (the tables' infinite-medium model).
     vec3 local_single_correction(const EmitterSample& s, const vec3& p, const vec3& n,
                                  CounterRng& rng, BakeCounters& counters) const;
+    // Whichever of the two the sample's distance calls for.
+    vec3 connection_single_correction(const EmitterSample& s, const vec3& p, const vec3& n,
+                                      CounterRng& rng, BakeCounters& counters) const {
+        return std::isfinite(s.distance) ? local_single_correction(s, p, n, rng, counters)
+                                         : single_correction(s, p, n, rng, counters);
+    }
     // whole_ray (with an emitter): t equiangular over [0, infinity); valid only before t_end.
     // w by the cosine, or by `directions` (receiver_directions.h).
     MediumPoint draw_medium_point(const vec3& p, const vec3& n, const vec3* emitter,

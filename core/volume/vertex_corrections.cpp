@@ -260,16 +260,14 @@ long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& 
     // values there, 10 % of the bake's lm_irradiance relMSE.)
     constexpr size_t kChannels = 9;
     std::vector<float> v(rows * kChannels, 0.0f);
-    std::vector<char> readable(rows, 0), ratio_known(rows, 0);
+    std::vector<char> readable(rows, 0);
     for (size_t r = 0; r < rows; ++r) {
         const vec3 emitters = (m.deferred[r].single + m.deferred[r].multiple) / float(paths);
         const vec3 surface = m.deferred[r].surface / float(paths);
         vec3 ratio(0.0f);
         for (int c = 0; c < 3; ++c)
-            if (m.unoccluded[r].tables[c] > 0.0f) {
+            if (m.unoccluded[r].tables[c] > 0.0f)
                 ratio[c] = m.unoccluded[r].correction[c] / m.unoccluded[r].tables[c];
-                ratio_known[r] = 1;
-            }
         if (!std::isfinite(emitters.x + emitters.y + emitters.z + surface.x + surface.y +
                            surface.z + ratio.x + ratio.y + ratio.z))
             continue;
@@ -298,7 +296,9 @@ long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& 
         if (!readable[r]) continue;
         const size_t i = m.texel[r];
         packed.straddles[i / 64].readable |= uint64_t(1) << (i % 64);
-        if (!ratio_known[r]) packed.straddles[i / 64].no_ratio |= uint64_t(1) << (i % 64);
+        // No channel of the tables: no ratio (it was left 0 above).
+        if (!glm::any(glm::greaterThan(m.unoccluded[r].tables, vec3(0.0f))))
+            packed.straddles[i / 64].no_ratio |= uint64_t(1) << (i % 64);
         uint16_t h[kHalvesPerTexel];
         for (size_t c = 0; c < kChannels; ++c)
             h[c] = glm::packHalf1x16(v[r * kChannels + c] * (c < 6 ? inv : inv_ratio));
@@ -411,14 +411,21 @@ VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit
         if (rays) *rays += cast;
         if (!read) return texel;
     }
-    texel.halves_ = map.halves.data() +
-                    PackedMap::rank(word.readable, word.readable_before, k) * kHalvesPerTexel;
-    texel.scale_ = map.scale;
-    texel.ratio_scale_ = map.ratio_scale;
-    texel.surface_light_ = surface_light_;
-    texel.ratio_known_ = !(word.no_ratio >> (k % 64) & 1);
+    texel = readable_texel(map, word, k);
     __builtin_prefetch(texel.halves_);
     return texel;
+}
+
+VertexCorrectionField::Texel VertexCorrectionField::readable_texel(
+    const PackedMap& map, const PackedMap::StraddleWord& word, size_t k) const {
+    Texel t;
+    t.halves_ = map.halves.data() +
+                PackedMap::rank(word.readable, word.readable_before, k) * kHalvesPerTexel;
+    t.scale_ = map.scale;
+    t.ratio_scale_ = map.ratio_scale;
+    t.surface_light_ = surface_light_;
+    t.ratio_known_ = !(word.no_ratio >> (k % 64) & 1);
+    return t;
 }
 
 VertexCorrectionField::Texel VertexCorrectionField::at_texel(size_t map, size_t texel) const {
@@ -429,14 +436,7 @@ VertexCorrectionField::Texel VertexCorrectionField::at_texel(size_t map, size_t 
     if (map >= packed_.size() || texel >= size_t(packed_[map].width) * packed_[map].height)
         return t;
     const PackedMap::StraddleWord& word = packed_[map].straddles[texel / 64];
-    if (word.readable >> (texel % 64) & 1)
-        t.halves_ = packed_[map].halves.data() +
-                    PackedMap::rank(word.readable, word.readable_before, texel) * kHalvesPerTexel;
-    t.ratio_known_ = !(word.no_ratio >> (texel % 64) & 1);
-    t.scale_ = packed_[map].scale;
-    t.ratio_scale_ = packed_[map].ratio_scale;
-    t.surface_light_ = surface_light_;
-    return t;
+    return word.readable >> (texel % 64) & 1 ? readable_texel(packed_[map], word, texel) : t;
 }
 
 vec3 VertexCorrectionField::Texel::value(bool with_surface_light) const {

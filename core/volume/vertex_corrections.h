@@ -173,6 +173,8 @@ class VertexCorrectionField {
         }
     };
     std::vector<PackedMap> packed_;
+    // Readable texel k of `map` (its word `word`): its entry, scales and flags.
+    Texel readable_texel(const PackedMap& map, const PackedMap::StraddleWord& word, size_t k) const;
     // The prepass of one map (its texels' terms) and their packing (returns the valid
     // straddling texels).
     struct MapTerms;
