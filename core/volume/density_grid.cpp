@@ -1,0 +1,249 @@
+#include "volume/density_grid.h"
+
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
+
+namespace freqlab {
+
+bool clip_to_box(const vec3& bmin, const vec3& bmax, const vec3& o, const vec3& d, double* t0,
+                 double* t1) {
+    // The slab test with the three axes side by side (one vector division, min / max without
+    // branches: a segment's tracking is on every bake path). An axis the ray runs parallel to
+    // clips nothing when the origin lies between its planes and everything otherwise.
+    double lo = *t0, hi = *t1;
+    const glm::dvec3 od(o), dd(d);
+    const glm::dvec3 inv = 1.0 / dd;  // +-inf on a parallel axis
+    const glm::dvec3 ta = (glm::dvec3(bmin) - od) * inv, tb = (glm::dvec3(bmax) - od) * inv;
+    for (int a = 0; a < 3; ++a) {
+        if (d[a] == 0.0f) {
+            if (o[a] < bmin[a] || o[a] > bmax[a]) return false;
+            continue;
+        }
+        lo = std::max(lo, std::min(ta[a], tb[a]));
+        hi = std::min(hi, std::max(ta[a], tb[a]));
+    }
+    *t0 = lo;
+    *t1 = hi;
+    return hi > lo;
+}
+
+DensityGrid::DensityGrid(vec3 box_min, vec3 box_max, ivec3 resolution, std::vector<float> voxels)
+    : min_(box_min), max_corner_(box_max), res_(resolution), voxels_(std::move(voxels)) {
+    voxel_ = (box_max - box_min) / vec3(resolution);
+    for (float v : voxels_) max_ = std::max(max_, v);
+    auto index = [&](int x, int y, int z) { return (size_t(z) * res_.y + y) * res_.x + x; };
+    march_res_ = res_;
+    for (int a = 0; a < 3; ++a) {
+        bool constant = res_[a] > 1;
+        for (int z = 0; z < res_.z && constant; ++z)
+            for (int y = 0; y < res_.y && constant; ++y)
+                for (int x = 0; x < res_.x && constant; ++x) {
+                    ivec3 first(x, y, z);
+                    first[a] = 0;
+                    constant = voxels_[index(x, y, z)] == voxels_[index(first.x, first.y, first.z)];
+                }
+        if (constant) march_res_[a] = 1;
+    }
+    march_voxel_ = (box_max - box_min) / vec3(march_res_);
+    march_inv_voxel_ = 1.0 / glm::dvec3(march_voxel_);
+    const ivec3 padded = march_res_ + 2;
+    march_voxels_.assign(size_t(padded.x) * padded.y * padded.z, 0.0f);
+    for (int z = 0; z < march_res_.z; ++z)
+        for (int y = 0; y < march_res_.y; ++y)
+            for (int x = 0; x < march_res_.x; ++x)
+                march_voxels_[(size_t(z + 1) * padded.y + y + 1) * padded.x + x + 1] =
+                    voxels_[index(x, y, z)];
+    int32_indices_ = march_voxels_.size() < size_t(1) << 31;
+    int varying = 0;
+    for (int a = 0; a < 3; ++a)
+        if (march_res_[a] > 1) {
+            ++varying;
+            line_axis_ = a;
+        }
+    if (varying == 0) line_axis_ = 2;
+    if (varying <= 1) {
+        const int n = march_res_[line_axis_];
+        line_.resize(size_t(n));
+        prefix_.assign(size_t(n) + 1, 0.0);
+        for (int k = 0; k < n; ++k) {
+            ivec3 c(0);
+            c[line_axis_] = k;
+            line_[size_t(k)] = voxels_[index(c.x, c.y, c.z)];
+            prefix_[size_t(k) + 1] =
+                prefix_[size_t(k)] + line_[size_t(k)] * march_voxel_[line_axis_];
+        }
+    } else {
+        line_axis_ = -1;
+    }
+}
+
+double DensityGrid::integral(const vec3& o, const vec3& d, double t_begin, double t_end,
+                             bool inside) const {
+    if (line_axis_ < 0) return integral_by_jumps(o, d, t_begin, t_end, inside);
+    double ta = t_begin, tb = t_end;
+    if (!inside && !clip_to_box(min_, max_corner_, o, d, &ta, &tb)) return 0.0;
+    const int a = line_axis_;
+    const int n = int(line_.size());
+    const double base = min_[a], size = march_voxel_[a];
+    const double z0 = double(o[a]) + ta * double(d[a]), z1 = double(o[a]) + tb * double(d[a]);
+    auto cell = [&](double z) { return std::clamp(int(std::floor((z - base) / size)), 0, n - 1); };
+    const int c0 = cell(z0), c1 = cell(z1);
+    // One cell: constant along the segment (also every ray parallel to the cells' faces).
+    if (c0 == c1) return line_[size_t(c0)] * (tb - ta);
+    // Otherwise d[a] != 0: the density integrated over z, divided by |dz / dt|.
+    auto prefix = [&](double z, int c) {
+        return prefix_[size_t(c)] + line_[size_t(c)] * (z - (base + c * size));
+    };
+    return std::abs(prefix(z1, c1) - prefix(z0, c0)) / std::abs(double(d[a]));
+}
+
+#if defined(__AVX2__)
+namespace {
+
+// One axis's crossings for sum_jumps_avx2: as in integral_by_jumps' scalar loop.
+struct JumpAxis {
+    double t0_minus_ta, dt, ub, dub, uc, duc;
+    int res_b, res_c, stride_b, stride_c, base0, dbase, before_offset, after_offset;
+};
+
+// The sum over crossings k < count of (t_k - ta) J_k, four at a time (the last four masked).
+double sum_jumps_avx2(const JumpAxis& a, const float* voxels, int count) {
+    const float* after = voxels + a.after_offset;
+    const float* before = voxels + a.before_offset;
+    const __m256d dub = _mm256_set1_pd(a.dub), ub = _mm256_set1_pd(a.ub);
+    const __m256d duc = _mm256_set1_pd(a.duc), uc = _mm256_set1_pd(a.uc);
+    const __m256d dt = _mm256_set1_pd(a.dt), t0 = _mm256_set1_pd(a.t0_minus_ta);
+    const __m128i lo = _mm_set1_epi32(-1), hi_b = _mm_set1_epi32(a.res_b),
+                  hi_c = _mm_set1_epi32(a.res_c);
+    const __m128i stride_b = _mm_set1_epi32(a.stride_b), stride_c = _mm_set1_epi32(a.stride_c);
+    const __m128i dbase4 = _mm_set1_epi32(4 * a.dbase);
+    __m128i base =
+        _mm_add_epi32(_mm_set1_epi32(a.base0),
+                      _mm_mullo_epi32(_mm_setr_epi32(0, 1, 2, 3), _mm_set1_epi32(a.dbase)));
+    __m256d kd = _mm256_setr_pd(0.0, 1.0, 2.0, 3.0);
+    const __m256d four = _mm256_set1_pd(4.0);
+    __m256d sum = _mm256_setzero_pd();
+    const __m128i lanes = _mm_setr_epi32(0, 1, 2, 3);
+    for (int k = 0; k < count; k += 4) {
+        const __m128 live = _mm_castsi128_ps(_mm_cmpgt_epi32(_mm_set1_epi32(count - k), lanes));
+        const __m128i cb = _mm_min_epi32(
+            _mm_max_epi32(_mm256_cvttpd_epi32(_mm256_floor_pd(_mm256_fmadd_pd(kd, dub, ub))), lo),
+            hi_b);
+        const __m128i cc = _mm_min_epi32(
+            _mm_max_epi32(_mm256_cvttpd_epi32(_mm256_floor_pd(_mm256_fmadd_pd(kd, duc, uc))), lo),
+            hi_c);
+        const __m128i index = _mm_add_epi32(
+            base, _mm_add_epi32(_mm_mullo_epi32(cb, stride_b), _mm_mullo_epi32(cc, stride_c)));
+        const __m128 zero = _mm_setzero_ps();
+        const __m128 jump = _mm_sub_ps(_mm_mask_i32gather_ps(zero, after, index, live, 4),
+                                       _mm_mask_i32gather_ps(zero, before, index, live, 4));
+        sum = _mm256_fmadd_pd(_mm256_fmadd_pd(kd, dt, t0), _mm256_cvtps_pd(jump), sum);
+        base = _mm_add_epi32(base, dbase4);
+        kd = _mm256_add_pd(kd, four);
+    }
+    const __m128d pair = _mm_add_pd(_mm256_castpd256_pd128(sum), _mm256_extractf128_pd(sum, 1));
+    return _mm_cvtsd_f64(_mm_add_sd(pair, _mm_unpackhi_pd(pair, pair)));
+}
+
+}  // namespace
+#endif
+
+double DensityGrid::integral_by_jumps(const vec3& o, const vec3& d, double t_begin, double t_end,
+                                      bool inside) const {
+    double ta = t_begin, tb = t_end;
+    if (!inside && !clip_to_box(min_, max_corner_, o, d, &ta, &tb)) return 0.0;
+    // The density along the ray, f(t), is constant between voxel faces; with J_c its jump
+    // f(t_c+) - f(t_c-) where the ray crosses a face at t_c, integration by parts gives
+    //   int_ta^tb f = (tb - ta) f(tb-) - sum_c (t_c - ta) J_c.
+    // Each crossing is independent of the others: its time is that of its plane, its two
+    // voxels the cells of the other axes at that time. A DDA instead finds each next crossing
+    // from the last, a dependency chain: 7.5 ns a voxel on smoke_room's grid against 4.5 ns a
+    // crossing here, where the crossings of one axis pipeline (the loop is bound by its
+    // instruction count: a second sum or a cheaper floor measured no faster). Same sum up to
+    // the float rounding of the box's faces (test Media.GridIntegralByJumpsIsTheMarchedSum).
+    const glm::dvec3 u0 = (glm::dvec3(o) - glm::dvec3(min_)) * march_inv_voxel_;
+    const glm::dvec3 du = glm::dvec3(d) * march_inv_voxel_;
+    const ivec3 res = march_res_, padded = march_res_ + 2;
+    const long axis_stride[3] = {1, long(padded.x), long(padded.x) * padded.y};
+    const float* voxels = march_voxels_.data();
+    // Cells -1 and res are the empty border: where float rounding puts the box's faces past
+    // the voxels' (march() does the same).
+    auto cell = [&](double t, int a) {
+        return std::clamp(int(std::floor(u0[a] + t * du[a])), -1, res[a]);
+    };
+    const double margin = 1e-9 * (tb - ta);
+    ivec3 first, last;
+    for (int a = 0; a < 3; ++a) {
+        first[a] = cell(ta + margin, a);
+        last[a] = cell(tb - margin, a);
+    }
+    auto index = [&](int x, int y, int z) {
+        return (x + 1) * axis_stride[0] + (y + 1) * axis_stride[1] + (z + 1) * axis_stride[2];
+    };
+    double sum = (tb - ta) * double(voxels[index(last.x, last.y, last.z)]);
+    for (int a = 0; a < 3; ++a) {
+        const int n = std::abs(last[a] - first[a]);
+        if (n == 0) continue;
+        const int b = (a + 1) % 3, c = (a + 2) % 3;
+        const int step = last[a] > first[a] ? 1 : -1;
+        // Plane q (between cells q - 1 and q) is crossed from the cell before to the one after;
+        // the k-th crossing's time and the other axes' coordinates are linear in k.
+        const int q0 = step > 0 ? first[a] + 1 : first[a];
+        const double inv_du = 1.0 / du[a];
+        const double t0 = (double(q0) - u0[a]) * inv_du, dt = double(step) * inv_du;
+        const double ub = u0[b] + t0 * du[b], dub = dt * du[b];
+        const double uc = u0[c] + t0 * du[c], duc = dt * du[c];
+        const int res_b = res[b], res_c = res[c];
+        const long stride_b = axis_stride[b], stride_c = axis_stride[c];
+        const long before_offset = step > 0 ? -axis_stride[a] : 0;
+        const long after_offset = step > 0 ? 0 : -axis_stride[a];
+        const long base0 = (q0 + 1) * axis_stride[a] + stride_b + stride_c;
+        const long dbase = step * axis_stride[a];
+        double jumps = 0.0;
+        int k = 0;
+#if defined(__AVX2__)
+        // Four crossings a step (AVX2 gathers of their two voxels); the scalar loop stays for
+        // builds without AVX2.
+        if (int32_indices_) {
+            const JumpAxis axis{t0 - ta,
+                                dt,
+                                ub,
+                                dub,
+                                uc,
+                                duc,
+                                res_b,
+                                res_c,
+                                int(stride_b),
+                                int(stride_c),
+                                int(base0),
+                                int(dbase),
+                                int(before_offset),
+                                int(after_offset)};
+            k = n;
+            jumps = sum_jumps_avx2(axis, voxels, n);
+        }
+#endif
+        for (; k < n; ++k) {
+            const double kd = double(k);
+            const int cb = std::clamp(int(std::floor(ub + kd * dub)), -1, res_b);
+            const int cc = std::clamp(int(std::floor(uc + kd * duc)), -1, res_c);
+            const long base = base0 + k * dbase + cb * stride_b + cc * stride_c;
+            jumps += (t0 + kd * dt - ta) *
+                     double(voxels[base + after_offset] - voxels[base + before_offset]);
+        }
+        sum -= jumps;
+    }
+    return sum;
+}
+
+float DensityGrid::at(const vec3& p) const {
+    const vec3 rel = (p - min_) / voxel_;
+    if (rel.x < 0 || rel.y < 0 || rel.z < 0 || rel.x >= res_.x || rel.y >= res_.y ||
+        rel.z >= res_.z)
+        return 0.0f;
+    const ivec3 c = glm::min(ivec3(rel), res_ - 1);
+    return voxels_[(size_t(c.z) * res_.y + c.y) * res_.x + c.x];
+}
+
+}  // namespace freqlab
