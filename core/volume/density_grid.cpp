@@ -75,12 +75,43 @@ DensityGrid::DensityGrid(vec3 box_min, vec3 box_max, ivec3 resolution, std::vect
         }
     } else {
         line_axis_ = -1;
+        if (march_voxels_.size() <= kMaxRunVoxels) build_runs();
     }
+}
+
+void DensityGrid::build_runs() {
+    const ivec3 padded = march_res_ + 2;
+    const size_t stride[3] = {1, size_t(padded.x), size_t(padded.x) * padded.y};
+    for (int a = 0; a < 3; ++a) {
+        if (march_res_[a] == 1) continue;
+        const int b = (a + 1) % 3, c = (a + 2) % 3;
+        const long row = padded[a] + 1;
+        run_stride_[a][a] = 1;
+        run_stride_[a][b] = row;
+        run_stride_[a][c] = row * padded[b];
+        std::vector<float>& run = runs_[a];
+        run.resize(size_t(row) * padded[b] * padded[c]);
+        const double size = march_voxel_[a];
+        for (int jc = 0; jc < padded[c]; ++jc)
+            for (int jb = 0; jb < padded[b]; ++jb) {
+                const size_t first = jb * stride[b] + jc * stride[c];
+                float* faces = &run[size_t(jb * run_stride_[a][b] + jc * run_stride_[a][c])];
+                double prefix = 0.0;  // summed in double, each face rounded once
+                faces[0] = 0.0f;
+                for (int k = 0; k < padded[a]; ++k) {
+                    prefix += double(march_voxels_[first + k * stride[a]]) * size;
+                    faces[k + 1] = float(prefix);
+                }
+            }
+    }
+    has_runs_ = true;
 }
 
 double DensityGrid::integral(const vec3& o, const vec3& d, double t_begin, double t_end,
                              bool inside) const {
-    if (line_axis_ < 0) return integral_by_jumps(o, d, t_begin, t_end, inside);
+    if (line_axis_ < 0)
+        return has_runs_ ? integral_by_runs(o, d, t_begin, t_end, inside)
+                         : integral_by_jumps(o, d, t_begin, t_end, inside);
     double ta = t_begin, tb = t_end;
     if (!inside && !clip_to_box(min_, max_corner_, o, d, &ta, &tb)) return 0.0;
     const int a = line_axis_;
@@ -235,6 +266,155 @@ double DensityGrid::integral_by_jumps(const vec3& o, const vec3& d, double t_beg
         sum -= jumps;
     }
     return sum;
+}
+
+#if defined(__AVX2__)
+namespace {
+
+// One crossing axis of integral_by_runs: the run axis's and the third axis's coordinates
+// (voxels) at the first crossing and their steps per crossing, and the index arithmetic.
+struct RunCrossings {
+    double ua, dua, uc, duc;
+    int res_a, res_c, stride_a, stride_c, base0, dbase, before_offset, after_offset;
+};
+
+// The sum over crossings k < count of the prefix's jump, four at a time (the last four
+// masked): a 64-bit gather of the voxel's two face prefixes on each side of the crossing,
+// deinterleaved after subtraction.
+double sum_run_jumps_avx2(const RunCrossings& x, const float* runs, int count) {
+    // The gathers' scale is a float's size: a 64-bit load at any float's index.
+    const long long* after = reinterpret_cast<const long long*>(runs + x.after_offset);
+    const long long* before = reinterpret_cast<const long long*>(runs + x.before_offset);
+    const __m256d dua = _mm256_set1_pd(x.dua), ua = _mm256_set1_pd(x.ua);
+    const __m256d duc = _mm256_set1_pd(x.duc), uc = _mm256_set1_pd(x.uc);
+    const __m128i lo = _mm_set1_epi32(-1), hi_a = _mm_set1_epi32(x.res_a),
+                  hi_c = _mm_set1_epi32(x.res_c);
+    const __m128i stride_a = _mm_set1_epi32(x.stride_a), stride_c = _mm_set1_epi32(x.stride_c);
+    const __m128i dbase4 = _mm_set1_epi32(4 * x.dbase);
+    __m128i base =
+        _mm_add_epi32(_mm_set1_epi32(x.base0),
+                      _mm_mullo_epi32(_mm_setr_epi32(0, 1, 2, 3), _mm_set1_epi32(x.dbase)));
+    const __m256i split = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
+    __m256d kd = _mm256_setr_pd(0.0, 1.0, 2.0, 3.0);
+    const __m256d four = _mm256_set1_pd(4.0);
+    __m256d sum = _mm256_setzero_pd();
+    const __m128i lanes = _mm_setr_epi32(0, 1, 2, 3);
+    for (int k = 0; k < count; k += 4) {
+        const __m256i live =
+            _mm256_cvtepi32_epi64(_mm_cmpgt_epi32(_mm_set1_epi32(count - k), lanes));
+        const __m256d u = _mm256_fmadd_pd(kd, dua, ua);
+        const __m128i ca =
+            _mm_min_epi32(_mm_max_epi32(_mm256_cvttpd_epi32(_mm256_floor_pd(u)), lo), hi_a);
+        const __m128i cc = _mm_min_epi32(
+            _mm_max_epi32(_mm256_cvttpd_epi32(_mm256_floor_pd(_mm256_fmadd_pd(kd, duc, uc))), lo),
+            hi_c);
+        const __m128i index = _mm_add_epi32(
+            base, _mm_add_epi32(_mm_mullo_epi32(ca, stride_a), _mm_mullo_epi32(cc, stride_c)));
+        const __m256i zero = _mm256_setzero_si256();
+        const __m256 jump = _mm256_sub_ps(
+            _mm256_castsi256_ps(_mm256_mask_i32gather_epi64(zero, after, index, live, 4)),
+            _mm256_castsi256_ps(_mm256_mask_i32gather_epi64(zero, before, index, live, 4)));
+        // Lanes 0-3: the jumps of the voxels' near faces' prefixes; 4-7: of their far faces'.
+        const __m256 faces = _mm256_permutevar8x32_ps(jump, split);
+        const __m256d d0 = _mm256_cvtps_pd(_mm256_castps256_ps128(faces));
+        const __m256d d1 = _mm256_cvtps_pd(_mm256_extractf128_ps(faces, 1));
+        const __m256d frac = _mm256_sub_pd(u, _mm256_cvtepi32_pd(ca));
+        sum = _mm256_add_pd(sum, _mm256_fmadd_pd(frac, _mm256_sub_pd(d1, d0), d0));
+        base = _mm_add_epi32(base, dbase4);
+        kd = _mm256_add_pd(kd, four);
+    }
+    const __m128d pair = _mm_add_pd(_mm256_castpd256_pd128(sum), _mm256_extractf128_pd(sum, 1));
+    return _mm_cvtsd_f64(_mm_add_sd(pair, _mm_unpackhi_pd(pair, pair)));
+}
+
+}  // namespace
+#endif
+
+double DensityGrid::integral_by_runs(const vec3& o, const vec3& d, double t_begin, double t_end,
+                                     bool inside) const {
+    if (!has_runs_) return integral_by_jumps(o, d, t_begin, t_end, inside);
+    double ta = t_begin, tb = t_end;
+    if (!inside && !clip_to_box(min_, max_corner_, o, d, &ta, &tb)) return 0.0;
+    // Along the ray, F(t) = P(row(t), u_a(t)), the row's prefix integral at the ray's
+    // coordinate u_a on the run axis a, grows at rate f(t) d_a inside a row and jumps where the
+    // row changes (a crossing of another axis; at a crossing of axis a itself P is continuous).
+    // So int_ta^tb f = (F(tb) - F(ta) - sum_c J_c) / d_a, J_c = P(row after, u_a(t_c)) -
+    // P(row before, u_a(t_c)): integral_by_jumps' sum without axis a's crossings. Axis a is the
+    // one crossed most (largest |du|), so |d_a| is not small.
+    const glm::dvec3 u0 = (glm::dvec3(o) - glm::dvec3(min_)) * march_inv_voxel_;
+    const glm::dvec3 du = glm::dvec3(d) * march_inv_voxel_;
+    int a = -1;
+    for (int i = 0; i < 3; ++i)
+        if (!runs_[i].empty() && (a < 0 || std::abs(du[i]) > std::abs(du[a]))) a = i;
+    if (du[a] == 0.0) return integral_by_jumps(o, d, ta, tb, true);  // in a plane of axis a
+    const float* run = runs_[a].data();
+    const long* run_stride = run_stride_[a];
+    const ivec3 res = march_res_;
+    auto cell = [&](double t, int i) {
+        return std::clamp(int(std::floor(u0[i] + t * du[i])), -1, res[i]);
+    };
+    const double margin = 1e-9 * (tb - ta);
+    ivec3 first, last;
+    for (int i = 0; i < 3; ++i) {
+        first[i] = cell(ta + margin, i);
+        last[i] = cell(tb - margin, i);
+    }
+    // P at run-axis coordinate u in the row of voxel c (a border voxel: its faces are equal).
+    auto prefix_at = [&](const ivec3& c, double u) {
+        const float* faces =
+            run + (c.x + 1) * run_stride[0] + (c.y + 1) * run_stride[1] + (c.z + 1) * run_stride[2];
+        return double(faces[0]) + (u - double(c[a])) * double(faces[1] - faces[0]);
+    };
+    double sum = prefix_at(last, u0[a] + tb * du[a]) - prefix_at(first, u0[a] + ta * du[a]);
+    for (int b = 0; b < 3; ++b) {
+        const int n = std::abs(last[b] - first[b]);
+        if (b == a || n == 0) continue;
+        const int c = 3 - a - b;
+        const int step = last[b] > first[b] ? 1 : -1;
+        // Plane q of axis b (between voxels q - 1 and q), crossed from the voxel before to the
+        // one after; the run and third axes' coordinates are linear in the crossing's number k.
+        const int q0 = step > 0 ? first[b] + 1 : first[b];
+        const double t0 = (double(q0) - u0[b]) / du[b], dt = double(step) / du[b];
+        const double ua = u0[a] + t0 * du[a], dua = dt * du[a];
+        const double uc = u0[c] + t0 * du[c], duc = dt * du[c];
+        const long stride_a = run_stride[a], stride_c = run_stride[c];
+        const long before_offset = step > 0 ? -run_stride[b] : 0;
+        const long after_offset = step > 0 ? 0 : -run_stride[b];
+        const long base0 = (q0 + 1) * run_stride[b] + stride_a + stride_c;
+        const long dbase = step * run_stride[b];
+        double jumps = 0.0;
+        int k = 0;
+#if defined(__AVX2__)
+        // Four crossings a step; the scalar loop stays for builds without AVX2 (runs exist
+        // only below kMaxRunVoxels, so the indices fit an int).
+        const RunCrossings x{ua,
+                             dua,
+                             uc,
+                             duc,
+                             res[a],
+                             res[c],
+                             int(stride_a),
+                             int(stride_c),
+                             int(base0),
+                             int(dbase),
+                             int(before_offset),
+                             int(after_offset)};
+        jumps = sum_run_jumps_avx2(x, run, n);
+        k = n;
+#endif
+        for (; k < n; ++k) {
+            const double u = ua + double(k) * dua;
+            const int ca = std::clamp(int(std::floor(u)), -1, res[a]);
+            const int cc = std::clamp(int(std::floor(uc + double(k) * duc)), -1, res[c]);
+            const long base = base0 + k * dbase + ca * stride_a + cc * stride_c;
+            const float* after = run + base + after_offset;
+            const float* before = run + base + before_offset;
+            const double d0 = after[0] - before[0], d1 = after[1] - before[1];
+            jumps += d0 + (u - double(ca)) * (d1 - d0);
+        }
+        sum -= jumps;
+    }
+    return sum / double(d[a]);
 }
 
 float DensityGrid::at(const vec3& p) const {

@@ -30,15 +30,27 @@ class DensityGrid {
     template <class Fn>
     void march(const vec3& o, const vec3& d, double t_begin, double t_end, Fn&& fn) const;
     // The integral of the density over [t_begin, t_end]: march() summed, or, for a grid that
-    // varies along one axis only (a height-fog ramp), in O(1) from prefix sums along it.
+    // varies along one axis only (a height-fog ramp), in O(1) from prefix sums along it;
+    // integral_by_runs where the grid has runs, integral_by_jumps otherwise.
     // `inside`: [t_begin, t_end] is known to lie in the grid's box (not clipped again).
     double integral(const vec3& o, const vec3& d, double t_begin, double t_end,
                     bool inside = false) const;
     // The same for any grid, from the density's jumps at the voxel faces (density_grid.cpp).
     double integral_by_jumps(const vec3& o, const vec3& d, double t_begin, double t_end,
                              bool inside = false) const;
+    // The same from prefix integrals along the ray's dominant axis (the grid's runs): only the
+    // crossings of the two other axes are summed, about half of the jumps' (density_grid.cpp).
+    // Float prefixes: within a few float roundings of the row integrals per crossing. Grids
+    // without runs (has_runs() false) fall back to integral_by_jumps.
+    double integral_by_runs(const vec3& o, const vec3& d, double t_begin, double t_end,
+                            bool inside = false) const;
+    // Runs are kept for grids that vary along two or more axes and have at most
+    // kMaxRunVoxels padded voxels (4 bytes a voxel per varying axis).
+    static constexpr size_t kMaxRunVoxels = size_t(1) << 22;
+    bool has_runs() const { return has_runs_; }
 
   private:
+    void build_runs();
     vec3 min_, max_corner_, voxel_;
     ivec3 res_;
     std::vector<float> voxels_;
@@ -55,6 +67,14 @@ class DensityGrid {
     // (prefix_[k] = sum over cells j < k of value x cell size); line_axis_ < 0 otherwise.
     int line_axis_ = -1;
     std::vector<double> line_, prefix_;
+    // Along axis a: each row of the padded grid along a as its prefix integrals at the voxel
+    // faces (padded[a] + 1 of them, the row contiguous), so that a voxel's two faces are one
+    // 64-bit load and a point u of the row (in voxels) has the prefix integral
+    // p0 + (u - voxel) (p1 - p0). run_stride_[a][i]: the index step of axis i in runs_[a].
+    // Empty for an axis along which the grid does not vary.
+    std::vector<float> runs_[3];
+    long run_stride_[3][3] = {};
+    bool has_runs_ = false;
 };
 
 // Ray-box slab test; false when the ray misses [t_begin, t_end].
