@@ -444,16 +444,28 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     // A deeper vertex reading the field keeps the tables' multiple scattering until it knows
     // whether the field holds for it (vertex_irradiance).
     const bool keep_multiple = no_multiple && unoccluded && !lit_here;
+    // A vertex drawing its own corrections (no ratio in its field texel) takes their real
+    // part alone as its single scattering: unbiased and >= 0. The tables' value plus the
+    // difference, unbiased too, went negative wherever a rare connection through a gap drew a
+    // model larger than its tables (valley, 1 texel/unit: irradiance -0.11 where VPT reads
+    // 0.006); there the real media are dark and the model is no control variate.
+    const bool draw = unoccluded && unoccluded->draw_corrections;
+    vec3 drawn_tables(0.0f);
     for (size_t i = 0; i < local.size(); ++i) {
         const EmitterSample& s = local[i];
         OccludedConnection c;
         OccludedConnection* want = lit_here ? &c : nullptr;
         if (!fixed || !s.fixed) {
-            const bool seen = direct_light(s, p, n, albedo_lum, rng, counters, parts, want,
-                                           no_multiple && !keep_multiple);
+            IrradianceParts own;
+            const bool seen = direct_light(s, p, n, albedo_lum, rng, counters, draw ? own : parts,
+                                           want, no_multiple && !keep_multiple);
             if (!seen && s.fixed && unoccluded) unoccluded->shadows |= shadow_bit(s.light);
-            if (seen && unoccluded && unoccluded->draw_corrections)
-                parts.single += connection_single_correction(s, p, n, rng, counters);
+            if (draw) {
+                parts.surface += own.surface;
+                parts.multiple += own.multiple;
+                drawn_tables += own.single;
+                if (seen) parts.single += connection_single_correction(s, p, n, rng, counters).real;
+            }
             if (!seen && lit_here) occluded[i] = c;
         } else if (learn) {
             if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, want, no_multiple) &&
@@ -489,7 +501,8 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
         record->mc_weight = mc_here ? mc_weight : 0.0f;
     }
     // Here parts.single holds the tables' single scattering of the unoccluded connections.
-    if (unoccluded) unoccluded->tables += parts.single;
+    // (A drawing vertex's parts.single holds the real parts instead.)
+    if (unoccluded) unoccluded->tables += draw ? drawn_tables : parts.single;
     if (keep_multiple) {
         unoccluded->left_multiple = parts.multiple;
         parts.multiple = vec3(0.0f);
@@ -508,7 +521,8 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
                 add_lit_medium(local[i], p, n, occluded[i].multiple, rng, counters, term,
                                walk_here);
             } else {
-                const vec3 correction = connection_single_correction(local[i], p, n, rng, counters);
+                const vec3 correction =
+                    connection_single_correction(local[i], p, n, rng, counters).difference();
                 drawn = correction;
                 // Filed apart with the tables' value of their own connection: the field and
                 // the baker's filter carry them as a ratio to it. Added to the tables of every
@@ -660,7 +674,7 @@ void BakeEstimator::indirect_segment(const vec3& p, const vec3& n, float albedo_
             y.distance = d;
             y.intensity = intensity + radiance_deferred * to_intensity;
             y.emitter_normal = hit.shading_normal;
-            *correction += local_single_correction(y, p, n, rng, counters);
+            *correction += local_single_correction(y, p, n, rng, counters).difference();
         }
     }
 }

@@ -169,6 +169,13 @@ struct UnoccludedSingle {
 
 class VertexCorrectionField;
 
+// One medium point's estimates of a connection's single scattering (BakeEstimator::
+// single_correction): through the real media and geometry, and by the tables' model.
+struct SingleCorrection {
+    vec3 real{0.0f}, model{0.0f};
+    vec3 difference() const { return real - model; }
+};
+
 class BakeEstimator {
   public:
     // `tables` is needed by Impulse only (may be null otherwise).
@@ -296,16 +303,18 @@ class BakeEstimator {
                                  const vec3& w, const HomogeneousMedium& here, CounterRng& rng,
                                  BakeCounters& counters) const;
     // A distant emitter's unoccluded connection: the lit medium's single scattering through
-    // the real media and geometry minus the tables' model of it (a control variate: the
-    // tables' value plus this is unbiased for single scattering, up to the tables' ZH error).
-    vec3 single_correction(const EmitterSample& s, const vec3& p, const vec3& n, CounterRng& rng,
-                           BakeCounters& counters) const;
+    // the real media and geometry (`real`, unbiased and >= 0) and the tables' model of it
+    // (`model`) on the same draw. Their difference is a control variate: the tables' value
+    // plus it is unbiased for single scattering, up to the tables' ZH error.
+    SingleCorrection single_correction(const EmitterSample& s, const vec3& p, const vec3& n,
+                                       CounterRng& rng, BakeCounters& counters) const;
     // The same for a point or area emitter sample (the tables' infinite-medium model).
-    vec3 local_single_correction(const EmitterSample& s, const vec3& p, const vec3& n,
-                                 CounterRng& rng, BakeCounters& counters) const;
+    SingleCorrection local_single_correction(const EmitterSample& s, const vec3& p, const vec3& n,
+                                             CounterRng& rng, BakeCounters& counters) const;
     // Whichever of the two the sample's distance calls for.
-    vec3 connection_single_correction(const EmitterSample& s, const vec3& p, const vec3& n,
-                                      CounterRng& rng, BakeCounters& counters) const {
+    SingleCorrection connection_single_correction(const EmitterSample& s, const vec3& p,
+                                                  const vec3& n, CounterRng& rng,
+                                                  BakeCounters& counters) const {
         return std::isfinite(s.distance) ? local_single_correction(s, p, n, rng, counters)
                                          : single_correction(s, p, n, rng, counters);
     }

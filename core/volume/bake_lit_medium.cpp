@@ -347,15 +347,16 @@ vec3 BakeEstimator::area_response_rescattered(const vec3& intensity, const vec3&
     return intensity * float(std::max(0.0, radiance));
 }
 
-vec3 BakeEstimator::single_correction(const EmitterSample& s, const vec3& p, const vec3& n,
-                                      CounterRng& rng, BakeCounters& counters) const {
+SingleCorrection BakeEstimator::single_correction(const EmitterSample& s, const vec3& p,
+                                                  const vec3& n, CounterRng& rng,
+                                                  BakeCounters& counters) const {
     // The tables' model: a half-space of the segment's effective medium whose boundary, normal
     // to l, lies D along l; along w its single-scattering integrand is
     // sigma_s f(l.w) E0 e^-st D e^-k t, k = st (1 - w.l), for t < D / (w.l) (w.l > 0).
     // Where the tables brought nothing (add_scattered: no medium on the segment, or past their
     // last distance) the model is empty and the correction is the real single scattering.
     const double depth = media_.exit_distance(p, s.dir);
-    if (!std::isfinite(depth)) return vec3(0.0f);  // a medium filling space: the sun is dark
+    if (!std::isfinite(depth)) return {};  // a medium filling space: the sun is dark
     const SegmentOptics optics =
         depth > 0.0 ? segment_optics(p, s.dir, depth, rng) : SegmentOptics{};
     HomogeneousMedium medium =
@@ -367,14 +368,13 @@ vec3 BakeEstimator::single_correction(const EmitterSample& s, const vec3& p, con
     // the same for every w (single_scatter_lobe.h).
     const SingleScatterLobe lobe(model, s.dir, n);
     const MediumPoint m = draw_medium_point(p, n, nullptr, rng, counters, false, &lobe);
-    if (glm::length(m.w) == 0.0f) return vec3(0.0f);  // a grazing direction: measure zero
+    if (glm::length(m.w) == 0.0f) return {};  // a grazing direction: measure zero
     const double wl = glm::dot(m.w, s.dir);
     // Beyond the drawn part of the ray (the media's exit or the first surface) only the model
     // has medium.
-    double difference = -model.integral(wl, m.t_end, kInfinity);
+    double model_part = model.integral(wl, m.t_end, kInfinity), real_here = 0.0;
     if (m.pdf > 0.0) {
-        const double model_here = model.at(wl, m.t) / m.pdf;
-        double real_here = 0.0;
+        model_part += model.at(wl, m.t) / m.pdf;
         const EmitterSeen at = m.valid ? emitter_seen(s, vec3(0.0f), m.x) : EmitterSeen{};
         if (at.valid && sees_receiver(m, counters)) {
             ++counters.rays;
@@ -383,16 +383,17 @@ vec3 BakeEstimator::single_correction(const EmitterSample& s, const vec3& p, con
                             hg_phase(m.here.g, wl) *
                             media_.transmittance(m.x, at.l, at.to_emitter) / m.pdf;
         }
-        difference += real_here - model_here;
     } else {
         // Nothing to draw from (no extinction along the ray): the real part is 0.
-        difference -= model.integral(wl, 0.0, m.t_end);
+        model_part += model.integral(wl, 0.0, m.t_end);
     }
-    return s.irradiance * float(m.direction_weight * difference);
+    const vec3 scale = s.irradiance * float(m.direction_weight);
+    return {scale * float(real_here), scale * float(model_part)};
 }
 
-vec3 BakeEstimator::local_single_correction(const EmitterSample& s, const vec3& p, const vec3& n,
-                                            CounterRng& rng, BakeCounters& counters) const {
+SingleCorrection BakeEstimator::local_single_correction(const EmitterSample& s, const vec3& p,
+                                                        const vec3& n, CounterRng& rng,
+                                                        BakeCounters& counters) const {
     // The tables' model: an infinite medium of the segment's effective optics around a point
     // (or differential-area, emission max(-n_e . l, 0)) emitter e; along w its integrand is
     // sigma_s f(l.w) I emission e^-st (t + r) / r^2, r = |e - x|, over all t >= 0: the point is
@@ -410,10 +411,10 @@ vec3 BakeEstimator::local_single_correction(const EmitterSample& s, const vec3& 
         model = HomogeneousMedium{0.0, 0.0, 0.0};
     const double st = model.sigma_t();
     const double g_model = model.g;
-    if (!(m.pdf > 0.0) || !std::isfinite(m.t)) return vec3(0.0f);
+    if (!(m.pdf > 0.0) || !std::isfinite(m.t)) return {};
     const glm::dvec3 to = glm::dvec3(emitter) - glm::dvec3(m.x);
     const double r = glm::length(to);
-    if (!(r > 0.0)) return vec3(0.0f);
+    if (!(r > 0.0)) return {};
     const glm::dvec3 l = to / r;
     const double cos_lw = glm::dot(l, glm::dvec3(m.w));
     const double emission_model = s.kind == EmitterKind::Area
@@ -433,7 +434,8 @@ vec3 BakeEstimator::local_single_correction(const EmitterSample& s, const vec3& 
                                         media_.transmittance(m.x, at.l, at.to_emitter) / m.pdf);
         }
     }
-    return float(m.direction_weight) * (real_here - s.intensity * float(model_here));
+    const float weight = float(m.direction_weight);
+    return {weight * real_here, weight * s.intensity * float(model_here)};
 }
 
 }  // namespace freqlab
