@@ -1,9 +1,16 @@
 // A density grid of a participating medium (seed, Deuxième article §4.4: what a segment's
 // effective medium integrates): piecewise constant per voxel (the value at the voxel centre), so
-// the integral along a ray is exact. It sums the density's jumps at the voxel faces the ray
-// crosses (each crossing independent of the others: integral_by_jumps); a grid that varies along
-// one axis only (height fog) is integrated in O(1) from prefix sums along that axis; a 3D DDA
+// the integral along a ray is exact up to float rounding. Three ways: a grid that varies along
+// one axis only (height fog) from prefix sums along that axis, in O(1); others from prefix
+// integrals along the ray's dominant axis, summing only the other two axes' crossings
+// (integral_by_runs), or from the density's jumps at every voxel face the ray crosses, each
+// crossing independent of the others (integral_by_jumps: grids too large for runs). A 3D DDA
 // visits the voxels in order where the order matters (free flights, media_collisions.cpp).
+//
+// | parameter      | meaning                                                               |
+// |----------------|-----------------------------------------------------------------------|
+// | kMaxRunVoxels  | the largest padded grid that keeps runs (4 M voxels: 4 bytes a voxel  |
+// |                | per varying axis, 48 MB at most)                                      |
 #pragma once
 
 #include <algorithm>
