@@ -179,6 +179,38 @@ TEST(Media, CollapsedGridAxesAreExactAgainstQuadrature) {
     }
 }
 
+// The grid tests' rays: 4000 from around grid g's box, one in eight along an axis and one in
+// eight in a coordinate plane, some starting past 0; fn(ray, o, d, t_begin, t_end, marched)
+// with the DDA's sum over the voxels (the reference).
+template <class Fn>
+void for_each_grid_test_ray(const DensityGrid& g, CounterRng& rng, Fn&& fn) {
+    const vec3 lo = g.box_min() - 0.5f, hi = g.box_max() + 0.5f;
+    for (int i = 0; i < 4000; ++i) {
+        const vec3 o = lo + (hi - lo) * vec3(rng.next_float(), rng.next_float(), rng.next_float());
+        vec3 d(rng.next_float() - 0.5f, rng.next_float() - 0.5f, rng.next_float() - 0.5f);
+        if (i % 8 == 0) d = vec3(0.0f);
+        if (i % 8 == 0) d[i / 8 % 3] = i % 16 == 0 ? 1.0f : -1.0f;  // along an axis
+        if (i % 8 == 1) d[i / 8 % 3] = 0.0f;                        // in a plane
+        d = glm::normalize(d);
+        const double t_begin = i % 5 == 0 ? 0.3 * rng.next_float() : 0.0;
+        const double t_end = t_begin + 4.0 * rng.next_float();
+        double marched = 0.0;
+        g.march(o, d, t_begin, t_end, [&](double a, double b, float v) { marched += (b - a) * v; });
+        fn(i, o, d, t_begin, t_end, marched);
+    }
+}
+
+// The box's float faces and the voxels' disagree by a few float ulps of a face coordinate
+// over |d_a|, times the largest density: what any integral may differ from the marched sum by.
+double face_rounding(const DensityGrid& g, const vec3& d) {
+    double face = 0.0;
+    for (int a = 0; a < 3; ++a)
+        if (d[a] != 0.0f)
+            face += 8.0 * 0x1p-24 * (std::abs(g.box_min()[a]) + std::abs(g.box_max()[a])) /
+                    std::abs(d[a]);
+    return face * g.max_value();
+}
+
 // The grid integral from the density's jumps at voxel faces (DensityGrid::integral_by_jumps)
 // is the DDA's sum over voxels, for rays from inside and outside, along axes and coordinate
 // planes, ending inside, and on a collapsed (height-fog) grid. The two differ only where the
@@ -196,30 +228,13 @@ TEST(Media, GridIntegralByJumpsIsTheMarchedSum) {
     int compared = 0;
     for (size_t gi = 0; gi < m.size(); ++gi) {
         const DensityGrid& g = *m.grid(gi);
-        const vec3 lo = g.box_min() - 0.5f, hi = g.box_max() + 0.5f;
-        for (int i = 0; i < 4000; ++i) {
-            const vec3 o =
-                lo + (hi - lo) * vec3(rng.next_float(), rng.next_float(), rng.next_float());
-            vec3 d(rng.next_float() - 0.5f, rng.next_float() - 0.5f, rng.next_float() - 0.5f);
-            if (i % 8 == 0) d = vec3(0.0f);
-            if (i % 8 == 0) d[i / 8 % 3] = i % 16 == 0 ? 1.0f : -1.0f;  // along an axis
-            if (i % 8 == 1) d[i / 8 % 3] = 0.0f;                        // in a plane
-            d = glm::normalize(d);
-            const double t_begin = i % 5 == 0 ? 0.3 * rng.next_float() : 0.0;
-            const double t_end = t_begin + 4.0 * rng.next_float();
-            double marched = 0.0;
-            g.march(o, d, t_begin, t_end,
-                    [&](double a, double b, float v) { marched += (b - a) * v; });
-            double face = 0.0;
-            for (int a = 0; a < 3; ++a)
-                if (d[a] != 0.0f)
-                    face += 8.0 * 0x1p-24 * (std::abs(g.box_min()[a]) + std::abs(g.box_max()[a])) /
-                            std::abs(d[a]);
-            EXPECT_NEAR(g.integral_by_jumps(o, d, t_begin, t_end), marched,
-                        1e-12 * (1.0 + marched) + face * g.max_value())
-                << "grid " << gi << " ray " << i;
-            compared += marched > 0.0;
-        }
+        for_each_grid_test_ray(g, rng,
+                               [&](int i, vec3 o, vec3 d, double t0, double t1, double marched) {
+                                   EXPECT_NEAR(g.integral_by_jumps(o, d, t0, t1), marched,
+                                               1e-12 * (1.0 + marched) + face_rounding(g, d))
+                                       << "grid " << gi << " ray " << i;
+                                   compared += marched > 0.0;
+                               });
     }
     EXPECT_GT(compared, 3000);  // most rays cross some density
 }
@@ -248,37 +263,24 @@ TEST(Media, GridIntegralByRunsIsTheMarchedSumWithinFloatRounding) {
         const vec3 voxel = size / vec3(g.resolution());
         const double row = double(g.max_value()) * std::max({size.x, size.y, size.z});
         const int crossings = g.resolution().x + g.resolution().y + g.resolution().z + 2;
-        const vec3 lo = g.box_min() - 0.5f, hi = g.box_max() + 0.5f;
         double error_sum = 0.0, bound_sum = 0.0;
-        for (int i = 0; i < 4000; ++i) {
-            const vec3 o =
-                lo + (hi - lo) * vec3(rng.next_float(), rng.next_float(), rng.next_float());
-            vec3 d(rng.next_float() - 0.5f, rng.next_float() - 0.5f, rng.next_float() - 0.5f);
-            if (i % 8 == 0) d = vec3(0.0f);
-            if (i % 8 == 0) d[i / 8 % 3] = i % 16 == 0 ? 1.0f : -1.0f;  // along an axis
-            if (i % 8 == 1) d[i / 8 % 3] = 0.0f;                        // in a plane
-            d = glm::normalize(d);
-            const double t_begin = i % 5 == 0 ? 0.3 * rng.next_float() : 0.0;
-            const double t_end = t_begin + 4.0 * rng.next_float();
-            double marched = 0.0;
-            g.march(o, d, t_begin, t_end,
-                    [&](double a, double b, float v) { marched += (b - a) * v; });
-            double face = 0.0, d_run = 0.0;  // d_run: |d| along the run axis, in voxels
-            for (int a = 0; a < 3; ++a) {
-                if (d[a] != 0.0f)
-                    face += 8.0 * 0x1p-24 * (std::abs(g.box_min()[a]) + std::abs(g.box_max()[a])) /
-                            std::abs(d[a]);
-                if (g.resolution()[a] > 1 && std::abs(d[a]) / voxel[a] > d_run / voxel[a])
-                    d_run = std::abs(d[a]);
-            }
-            const double rounding = d_run > 0.0 ? crossings * 0x1p-24 * 4.0 * row / d_run : 0.0;
-            const double bound = 1e-12 * (1.0 + marched) + face * g.max_value() + rounding;
-            const double error = std::abs(g.integral_by_runs(o, d, t_begin, t_end) - marched);
-            EXPECT_LE(error, bound) << "grid " << gi << " ray " << i << " marched " << marched;
-            error_sum += error;
-            bound_sum += bound;
-            compared += marched > 0.0;
-        }
+        for_each_grid_test_ray(
+            g, rng, [&](int i, vec3 o, vec3 d, double t0, double t1, double marched) {
+                // |d| along the run axis: the varying axis of the largest |d| in voxels.
+                double d_run = 0.0, best = 0.0;
+                for (int a = 0; a < 3; ++a)
+                    if (g.resolution()[a] > 1 && std::abs(d[a]) / voxel[a] > best) {
+                        best = std::abs(d[a]) / voxel[a];
+                        d_run = std::abs(d[a]);
+                    }
+                const double rounding = d_run > 0.0 ? crossings * 0x1p-24 * 4.0 * row / d_run : 0.0;
+                const double bound = 1e-12 * (1.0 + marched) + face_rounding(g, d) + rounding;
+                const double error = std::abs(g.integral_by_runs(o, d, t0, t1) - marched);
+                EXPECT_LE(error, bound) << "grid " << gi << " ray " << i << " marched " << marched;
+                error_sum += error;
+                bound_sum += bound;
+                compared += marched > 0.0;
+            });
         EXPECT_LT(error_sum, 0.01 * bound_sum) << "grid " << gi;
     }
     EXPECT_GT(compared, 3000);  // most rays cross some density

@@ -132,6 +132,16 @@ double DensityGrid::integral(const vec3& o, const vec3& d, double t_begin, doubl
 #if defined(__AVX2__)
 namespace {
 
+// The voxels of four coordinates, clamped to the border [lo, hi] (-1 and res).
+__m128i voxel_of(__m256d u, __m128i lo, __m128i hi) {
+    return _mm_min_epi32(_mm_max_epi32(_mm256_cvttpd_epi32(_mm256_floor_pd(u)), lo), hi);
+}
+
+double horizontal_sum(__m256d v) {
+    const __m128d pair = _mm_add_pd(_mm256_castpd256_pd128(v), _mm256_extractf128_pd(v, 1));
+    return _mm_cvtsd_f64(_mm_add_sd(pair, _mm_unpackhi_pd(pair, pair)));
+}
+
 // One axis's crossings for sum_jumps_avx2: as in integral_by_jumps' scalar loop.
 struct JumpAxis {
     double t0_minus_ta, dt, ub, dub, uc, duc;
@@ -158,12 +168,8 @@ double sum_jumps_avx2(const JumpAxis& a, const float* voxels, int count) {
     const __m128i lanes = _mm_setr_epi32(0, 1, 2, 3);
     for (int k = 0; k < count; k += 4) {
         const __m128 live = _mm_castsi128_ps(_mm_cmpgt_epi32(_mm_set1_epi32(count - k), lanes));
-        const __m128i cb = _mm_min_epi32(
-            _mm_max_epi32(_mm256_cvttpd_epi32(_mm256_floor_pd(_mm256_fmadd_pd(kd, dub, ub))), lo),
-            hi_b);
-        const __m128i cc = _mm_min_epi32(
-            _mm_max_epi32(_mm256_cvttpd_epi32(_mm256_floor_pd(_mm256_fmadd_pd(kd, duc, uc))), lo),
-            hi_c);
+        const __m128i cb = voxel_of(_mm256_fmadd_pd(kd, dub, ub), lo, hi_b);
+        const __m128i cc = voxel_of(_mm256_fmadd_pd(kd, duc, uc), lo, hi_c);
         const __m128i index = _mm_add_epi32(
             base, _mm_add_epi32(_mm_mullo_epi32(cb, stride_b), _mm_mullo_epi32(cc, stride_c)));
         const __m128 zero = _mm_setzero_ps();
@@ -173,12 +179,29 @@ double sum_jumps_avx2(const JumpAxis& a, const float* voxels, int count) {
         base = _mm_add_epi32(base, dbase4);
         kd = _mm256_add_pd(kd, four);
     }
-    const __m128d pair = _mm_add_pd(_mm256_castpd256_pd128(sum), _mm256_extractf128_pd(sum, 1));
-    return _mm_cvtsd_f64(_mm_add_sd(pair, _mm_unpackhi_pd(pair, pair)));
+    return horizontal_sum(sum);
 }
 
 }  // namespace
 #endif
+
+DensityGrid::RayInVoxels DensityGrid::in_voxels(const vec3& o, const vec3& d, double ta,
+                                                double tb) const {
+    RayInVoxels r;
+    r.u0 = (glm::dvec3(o) - glm::dvec3(min_)) * march_inv_voxel_;
+    r.du = glm::dvec3(d) * march_inv_voxel_;
+    // Cells -1 and res are the empty border: where float rounding puts the box's faces past
+    // the voxels' (march() does the same).
+    const double margin = 1e-9 * (tb - ta);
+    for (int a = 0; a < 3; ++a) {
+        auto cell = [&](double t) {
+            return std::clamp(int(std::floor(r.u0[a] + t * r.du[a])), -1, march_res_[a]);
+        };
+        r.first[a] = cell(ta + margin);
+        r.last[a] = cell(tb - margin);
+    }
+    return r;
+}
 
 double DensityGrid::integral_by_jumps(const vec3& o, const vec3& d, double t_begin, double t_end,
                                       bool inside) const {
@@ -193,22 +216,12 @@ double DensityGrid::integral_by_jumps(const vec3& o, const vec3& d, double t_beg
     // crossing here, where the crossings of one axis pipeline (the loop is bound by its
     // instruction count: a second sum or a cheaper floor measured no faster). Same sum up to
     // the float rounding of the box's faces (test Media.GridIntegralByJumpsIsTheMarchedSum).
-    const glm::dvec3 u0 = (glm::dvec3(o) - glm::dvec3(min_)) * march_inv_voxel_;
-    const glm::dvec3 du = glm::dvec3(d) * march_inv_voxel_;
+    const RayInVoxels ray = in_voxels(o, d, ta, tb);
+    const glm::dvec3 &u0 = ray.u0, &du = ray.du;
+    const ivec3 &first = ray.first, &last = ray.last;
     const ivec3 res = march_res_, padded = march_res_ + 2;
     const long axis_stride[3] = {1, long(padded.x), long(padded.x) * padded.y};
     const float* voxels = march_voxels_.data();
-    // Cells -1 and res are the empty border: where float rounding puts the box's faces past
-    // the voxels' (march() does the same).
-    auto cell = [&](double t, int a) {
-        return std::clamp(int(std::floor(u0[a] + t * du[a])), -1, res[a]);
-    };
-    const double margin = 1e-9 * (tb - ta);
-    ivec3 first, last;
-    for (int a = 0; a < 3; ++a) {
-        first[a] = cell(ta + margin, a);
-        last[a] = cell(tb - margin, a);
-    }
     auto index = [&](int x, int y, int z) {
         return (x + 1) * axis_stride[0] + (y + 1) * axis_stride[1] + (z + 1) * axis_stride[2];
     };
@@ -303,11 +316,8 @@ double sum_run_jumps_avx2(const RunCrossings& x, const float* runs, int count) {
         const __m256i live =
             _mm256_cvtepi32_epi64(_mm_cmpgt_epi32(_mm_set1_epi32(count - k), lanes));
         const __m256d u = _mm256_fmadd_pd(kd, dua, ua);
-        const __m128i ca =
-            _mm_min_epi32(_mm_max_epi32(_mm256_cvttpd_epi32(_mm256_floor_pd(u)), lo), hi_a);
-        const __m128i cc = _mm_min_epi32(
-            _mm_max_epi32(_mm256_cvttpd_epi32(_mm256_floor_pd(_mm256_fmadd_pd(kd, duc, uc))), lo),
-            hi_c);
+        const __m128i ca = voxel_of(u, lo, hi_a);
+        const __m128i cc = voxel_of(_mm256_fmadd_pd(kd, duc, uc), lo, hi_c);
         const __m128i index = _mm_add_epi32(
             base, _mm_add_epi32(_mm_mullo_epi32(ca, stride_a), _mm_mullo_epi32(cc, stride_c)));
         const __m256i zero = _mm256_setzero_si256();
@@ -323,8 +333,7 @@ double sum_run_jumps_avx2(const RunCrossings& x, const float* runs, int count) {
         base = _mm_add_epi32(base, dbase4);
         kd = _mm256_add_pd(kd, four);
     }
-    const __m128d pair = _mm_add_pd(_mm256_castpd256_pd128(sum), _mm256_extractf128_pd(sum, 1));
-    return _mm_cvtsd_f64(_mm_add_sd(pair, _mm_unpackhi_pd(pair, pair)));
+    return horizontal_sum(sum);
 }
 
 }  // namespace
@@ -341,8 +350,9 @@ double DensityGrid::integral_by_runs(const vec3& o, const vec3& d, double t_begi
     // So int_ta^tb f = (F(tb) - F(ta) - sum_c J_c) / d_a, J_c = P(row after, u_a(t_c)) -
     // P(row before, u_a(t_c)): integral_by_jumps' sum without axis a's crossings. Axis a is the
     // one crossed most (largest |du|), so |d_a| is not small.
-    const glm::dvec3 u0 = (glm::dvec3(o) - glm::dvec3(min_)) * march_inv_voxel_;
-    const glm::dvec3 du = glm::dvec3(d) * march_inv_voxel_;
+    const RayInVoxels ray = in_voxels(o, d, ta, tb);
+    const glm::dvec3 &u0 = ray.u0, &du = ray.du;
+    const ivec3 &first = ray.first, &last = ray.last;
     int a = -1;
     for (int i = 0; i < 3; ++i)
         if (!runs_[i].empty() && (a < 0 || std::abs(du[i]) > std::abs(du[a]))) a = i;
@@ -350,15 +360,6 @@ double DensityGrid::integral_by_runs(const vec3& o, const vec3& d, double t_begi
     const float* run = runs_[a].data();
     const long* run_stride = run_stride_[a];
     const ivec3 res = march_res_;
-    auto cell = [&](double t, int i) {
-        return std::clamp(int(std::floor(u0[i] + t * du[i])), -1, res[i]);
-    };
-    const double margin = 1e-9 * (tb - ta);
-    ivec3 first, last;
-    for (int i = 0; i < 3; ++i) {
-        first[i] = cell(ta + margin, i);
-        last[i] = cell(tb - margin, i);
-    }
     // P at run-axis coordinate u in the row of voxel c (a border voxel: its faces are equal).
     auto prefix_at = [&](const ivec3& c, double u) {
         const float* faces =

@@ -58,6 +58,12 @@ class DensityGrid {
 
   private:
     void build_runs();
+    // A clipped segment [ta, tb] in march voxels: origin and direction, first and last voxel.
+    struct RayInVoxels {
+        glm::dvec3 u0, du;
+        ivec3 first, last;
+    };
+    RayInVoxels in_voxels(const vec3& o, const vec3& d, double ta, double tb) const;
     vec3 min_, max_corner_, voxel_;
     ivec3 res_;
     std::vector<float> voxels_;
