@@ -250,3 +250,43 @@ TEST(LightmapAtlas, TexelsUnderAFloorAreCoveredAndFilteredApartFromTheOpenGround
     }
     EXPECT_GT(across, 20) << "the window reaches across the floor's edge";
 }
+
+// The texel filter's single-scattering ratio (ratio_correction): where the window's paired
+// tables explain its real parts it scales the texel's tables by their ratio; where they explain
+// nothing (tables 1e-6 against real parts of 40: a wall facing a smoke volume its connections
+// only graze) it reads the window's mean real part instead of 1e6 times the texel's tables; a
+// dark window (no real part) reads 0; a window that drew nothing keeps the tables; and the
+// corrected value is never negative.
+TEST(TexelFilter, RatioCorrectionScalesExplainedTablesAndLeansToTheMeanWhereTheyExplainNothing) {
+    const std::vector<size_t> near = {0, 1, 2, 3};
+    auto window = [](vec3 tables_i, vec3 paired, vec3 real) {
+        std::vector<SingleCorrectionSums> sums(4);
+        for (SingleCorrectionSums& s : sums) {
+            s.paired_tables = paired / 4.0f;
+            s.real = real / 4.0f;
+        }
+        sums[0].tables = tables_i;
+        return sums;
+    };
+    auto corrected = [&](vec3 tables_i, vec3 paired, vec3 real) {
+        return tables_i + ratio_correction(window(tables_i, paired, real), 0, near);
+    };
+    // Explained: T R / P = 1.5 within kTablesExplainShare's pull towards the mean (1.0).
+    const vec3 explained = corrected(vec3(3.0f), vec3(8.0f), vec3(4.0f));
+    EXPECT_NEAR(explained.x, 1.5f, 0.02f);
+    EXPECT_LT(explained.x, 1.5f);
+    EXPECT_GT(explained.x, 1.4f);
+    // Unexplained: the mean real part per texel, 40 / 4.
+    EXPECT_NEAR(corrected(vec3(1e-7f), vec3(1e-6f), vec3(40.0f)).x, 10.0f, 1e-3f);
+    // Dark and nothing drawn.
+    EXPECT_EQ(corrected(vec3(2.0f), vec3(5.0f), vec3(0.0f)).x, 0.0f);
+    EXPECT_EQ(ratio_correction(window(vec3(2.0f), vec3(0.0f), vec3(0.0f)), 0, near).x, 0.0f);
+    // Never negative, whatever the sums.
+    CounterRng rng(3, 1, 4, 1);
+    for (int k = 0; k < 10000; ++k) {
+        const float t = std::exp(20.0f * rng.next_float() - 10.0f);
+        const float p = std::exp(20.0f * rng.next_float() - 10.0f);
+        const float r = rng.next_float() < 0.1f ? 0.0f : std::exp(20.0f * rng.next_float() - 10.0f);
+        EXPECT_GE(corrected(vec3(t), vec3(p), vec3(r)).x, -1e-6f * t) << t << " " << p << " " << r;
+    }
+}

@@ -147,12 +147,12 @@ inline uint64_t shadow_bit(int light) {
 // A deeper vertex also learns from it which point and directional lights it sees occluded (a
 // bit each, as the texel filter's guide) and the tables' multiple scattering it left to the
 // field: the field's value holds only for points shadowed as its texel is.
-// At a texel of the bake (the baker passes one), the corrections travel apart in the same way
-// and `paired_tables` holds the tables' single scattering of the very connections whose
-// corrections were drawn, weighted alike: the filter applies their ratio to the texel's own
-// tables (texel_filter.h, filter_single_corrections).
+// At a texel of the bake (the baker passes one), the drawn corrections' real parts travel apart
+// (`real`) and `paired_tables` holds the tables' single scattering of the very connections
+// whose corrections were drawn, weighted alike: the filter applies their ratio to the texel's
+// own tables (texel_filter.h, ratio_correction).
 struct UnoccludedSingle {
-    vec3 tables{0.0f}, correction{0.0f};
+    vec3 tables{0.0f}, correction{0.0f}, real{0.0f};
     uint64_t shadows = 0;
     vec3 left_multiple{0.0f};
     vec3 paired_tables{0.0f};
@@ -162,6 +162,7 @@ struct UnoccludedSingle {
     UnoccludedSingle& operator+=(const UnoccludedSingle& o) {
         tables += o.tables;
         correction += o.correction;
+        real += o.real;
         paired_tables += o.paired_tables;
         return *this;
     }

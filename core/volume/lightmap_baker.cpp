@@ -179,16 +179,16 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
             if (t.state != TexelState::Valid) continue;
             // Summed sample by sample into the running total: the same additions in the
             // same order whatever the split into passes.
-            UnoccludedSingle single;
-            UnoccludedSingle* files = single_sums_[mi].empty() ? nullptr : &single;
+            const bool files = !single_sums_[mi].empty();
             for (int s = first; s < first + samples; ++s) {
                 CounterRng rng = texel_random(settings_.seed, mi, i, s);
-                add_texel_path(
-                    estimator_.estimate(t.position, t.normal, t.albedo, rng, counters,
-                                        &fixed_[mi][i], &deferred_sums_[mi][i], rates[i], files),
-                    sums_[mi][i], light_squares_[mi][i]);
+                UnoccludedSingle single;
+                add_texel_path(estimator_.estimate(t.position, t.normal, t.albedo, rng, counters,
+                                                   &fixed_[mi][i], &deferred_sums_[mi][i], rates[i],
+                                                   files ? &single : nullptr),
+                               sums_[mi][i], light_squares_[mi][i]);
+                if (files) single_sums_[mi][i] += single;
             }
-            if (files) single_sums_[mi][i] += single;
         }
         rays += counters.rays;
         queries += counters.impulse_queries;
@@ -380,7 +380,6 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
             const LightmapTexel& t = map.texels.at(j);
             if (t.state != TexelState::Valid && j != texel) continue;
             BakeEstimator::FixedDirect fixed;
-            UnoccludedSingle unoccluded;
             float light_squares = 0.0f;
             const bool record = filter && j == texel;
             for (int s = 0; s < spp; ++s) {
@@ -388,10 +387,12 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
                 TexelPathRecord path;
                 const PathRecording recording(record ? &path : nullptr);
                 const IrradianceParts before = deferred[j];
+                UnoccludedSingle unoccluded;  // added sample by sample, as the bake does
                 path.path =
                     estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
                                        &deferred[j], rates[j], files ? &unoccluded : nullptr);
                 add_texel_path(path.path, sums[j], light_squares);
+                if (files) single[j] += unoccluded;
                 if (!record) continue;
                 path.deferred = deferred[j];
                 path.deferred.surface -= before.surface;
@@ -399,7 +400,6 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
                 path.deferred.multiple -= before.multiple;
                 filter->paths.push_back(std::move(path));
             }
-            if (files) single[j] += unoccluded;
             set_texel_filter_guide(guide, j, fixed, sums[j], light_squares, spp);
         }
     IrradianceParts sum = sums[texel];

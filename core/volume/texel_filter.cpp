@@ -138,14 +138,17 @@ std::vector<IrradianceParts> filter_texel_sums(const ObjectLightmap& map,
 
 vec3 ratio_correction(const std::vector<SingleCorrectionSums>& sums, size_t i,
                       const std::vector<size_t>& near) {
-    vec3 corrections(0.0f), paired(0.0f);
+    vec3 real(0.0f), paired(0.0f);
     for (size_t j : near) {
-        corrections += sums[j].corrections;
+        real += sums[j].real;
         paired += sums[j].paired_tables;
     }
+    const float e = kTablesExplainShare, n = float(near.size());
     vec3 out(0.0f);
-    for (int c = 0; c < 3; ++c)
-        if (paired[c] > 0.0f) out[c] = sums[i].tables[c] * (corrections[c] / paired[c]);
+    for (int c = 0; c < 3; ++c) {
+        const float tables = sums[i].tables[c], below = paired[c] + e * real[c];
+        if (below > 0.0f) out[c] = real[c] * (tables + e * real[c] / n) / below - tables;
+    }
     return out;
 }
 

@@ -97,24 +97,30 @@ constexpr float kMaxMcRateBoost = 8.0f;
 std::vector<float> texel_mc_rates(const ObjectLightmap& map, const BakeEstimator& estimator);
 // A texel's single-scattering corrections of its unoccluded connections (impulse), summed
 // apart from its other Monte Carlo terms: the tables' single scattering of those connections on
-// every path, and the corrections drawn (at the texel's Monte Carlo rate, by emitter roulette)
-// beside the tables' value of their own connections, weighted alike (UnoccludedSingle). The
-// filter applies the ratio of the corrections to those tables, summed over the texel's window,
-// to the texel's own tables: a texel in a gap under a house (its rare unoccluded environment
-// samples' corrections about minus their tables' value) reads about 0, not the tables of every
-// path plus one correction at weight 1 / rate (-1.5 where VPT reads 0 on valley at 4
-// texels/unit).
+// every path, and the real single scattering drawn for some of them (at the texel's Monte Carlo
+// rate, by emitter roulette) beside the tables' value of those same connections, weighted alike
+// (UnoccludedSingle). The filter applies the ratio of the real parts to their tables, summed
+// over the texel's window, to the texel's own tables: a texel in a gap under a house (its rare
+// unoccluded environment samples see dark media) reads about 0, not the tables of every path
+// plus one correction at weight 1 / rate (-1.5 where VPT reads 0 on valley at 4 texels/unit).
 struct SingleCorrectionSums {
-    vec3 tables{0.0f}, paired_tables{0.0f}, corrections{0.0f};
+    vec3 tables{0.0f}, paired_tables{0.0f}, real{0.0f};
     SingleCorrectionSums& operator+=(const UnoccludedSingle& u) {
         tables += u.tables;
         paired_tables += u.paired_tables;
-        corrections += u.correction;
+        real += u.real;
         return *this;
     }
 };
-// Texel i's correction: its tables x, per channel, the corrections over their tables summed
-// over `near` (0 where those tables are 0: no correction drawn there).
+// Where a window's paired tables fall below this share of its real single scattering, the
+// tables no longer explain it (a wall whose connections graze a smoke volume it faces: paired
+// tables 0.0025 against real parts 5e6 times larger on smoke_room), and the texel leans to the
+// window's mean real part instead of scaling its own tables by an exploding ratio.
+constexpr float kTablesExplainShare = 0.05f;
+// Texel i's correction of its tables T, per channel, from the real parts R and paired tables P
+// summed over `near` (n texels): R (T + e R / n) / (P + e R) - T, e = kTablesExplainShare:
+// T R / P where P >> e R, the window's mean R / n where P << e R; the corrected value is >= 0.
+// 0 where nothing was drawn (R = P = 0).
 vec3 ratio_correction(const std::vector<SingleCorrectionSums>& sums, size_t i,
                       const std::vector<size_t>& near);
 // Texel i's filtered terms over `near`: the mean of its sums, plus with `single` its
