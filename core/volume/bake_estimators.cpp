@@ -338,12 +338,15 @@ IrradianceParts BakeEstimator::estimate(const vec3& p, const vec3& n, const vec3
                                                reuse ? fixed : nullptr, deferred ? &later : nullptr,
                                                false, mc_rate, unoccluded ? &single : nullptr);
     if (!all_finite(parts.total()) || !all_finite(later.total()) ||
-        !all_finite(single.tables + single.correction + single.real + single.paired_tables)) {
+        !all_finite(single.tables + single.real + single.paired_tables)) {
         ++counters.guarded;
         return {};
     }
     if (deferred) *deferred += later;
-    if (unoccluded) *unoccluded += single;
+    if (unoccluded) {
+        single.paths = 1.0f;
+        *unoccluded += single;
+    }
     return parts;
 }
 
@@ -525,25 +528,21 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
                     connection_single_correction(local[i], p, n, rng, counters);
                 const vec3 correction = drawn_parts.difference();
                 drawn = correction;
-                // Filed apart with the tables' value of their own connection: the field and
-                // the baker's filter carry them as a ratio to it. Added to the tables of every
-                // path, a rare correction weighted 1 / rate (an environment sample through a
-                // gap under a house, about minus its tables' value) left a texel there at -1.5
-                // where VPT reads 0 (valley, 4 texels/unit).
-                if (unoccluded && prepass) {
-                    // The field's ratio divides by the tables of every path: its prepass draws
-                    // the corrections on every path.
-                    unoccluded->correction += correction * w * mc_weight;
-                } else if (unoccluded) {
-                    // The texel: the real parts beside the tables' value of their connections,
-                    // whose ratio the filter applies to the texel's tables (>= 0; the
-                    // control-variate form, tables + corrections, went below 0 where a window's
-                    // models outweighed its tables).
+                // The real part filed apart, its ratio to tables applied to a texel's or
+                // vertex's own tables: the field's to the tables of every path of its prepass
+                // (drawn on every path), the texel filter's to the tables of the very
+                // connections drawn. Added to the tables of every path, a rare correction
+                // weighted 1 / rate (an environment sample through a gap under a house, about
+                // minus its tables' value) left a texel there at -1.5 where VPT reads 0
+                // (valley, 4 texels/unit); as tables + corrections the ratio still went below
+                // 0 where a window's models outweighed its tables.
+                if (unoccluded) {
                     const float weight = w * mc_weight;
                     unoccluded->real += drawn_parts.real * weight;
-                    unoccluded->paired_tables +=
-                        unoccluded_scatter(local[i], p, n, albedo_lum, rng, counters).single *
-                        weight;
+                    if (!prepass)
+                        unoccluded->paired_tables +=
+                            unoccluded_scatter(local[i], p, n, albedo_lum, rng, counters).single *
+                            weight;
                 } else {
                     term.single += correction;
                 }

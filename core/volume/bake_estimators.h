@@ -140,19 +140,20 @@ inline uint64_t shadow_bit(int light) {
     return uint64_t(1) << (unsigned(light) % 64u);
 }
 
-// A vertex's tables' single scattering of its unoccluded connections and, at a texel of the
-// vertex correction field's prepass, the Monte Carlo corrections of it (single_correction,
-// local_single_correction): the field carries their ratio, which a deeper vertex applies to its
-// own tables' value (vertex_corrections.h).
+// A vertex's tables' single scattering of its unoccluded connections (`tables`) and, where its
+// Monte Carlo terms ran, the real single scattering of those connections drawn by
+// single_correction / local_single_correction (`real`), over `paths` paths. At a texel of the
+// vertex correction field's prepass (drawn on every path) the field carries their ratio,
+// which a deeper vertex applies to its own tables' value (vertex_corrections.h).
 // A deeper vertex also learns from it which point and directional lights it sees occluded (a
 // bit each, as the texel filter's guide) and the tables' multiple scattering it left to the
 // field: the field's value holds only for points shadowed as its texel is.
-// At a texel of the bake (the baker passes one), the drawn corrections' real parts travel apart
-// (`real`) and `paired_tables` holds the tables' single scattering of the very connections
-// whose corrections were drawn, weighted alike: the filter applies their ratio to the texel's
-// own tables (texel_filter.h, ratio_correction).
+// At a texel of the bake (the baker passes one), `paired_tables` holds the tables' single
+// scattering of the very connections whose real parts were drawn, weighted alike: the filter
+// applies their ratio to the texel's own tables (texel_filter.h, ratio_correction).
 struct UnoccludedSingle {
-    vec3 tables{0.0f}, correction{0.0f}, real{0.0f};
+    vec3 tables{0.0f}, real{0.0f};
+    float paths = 0.0f;
     uint64_t shadows = 0;
     vec3 left_multiple{0.0f};
     vec3 paired_tables{0.0f};
@@ -161,8 +162,8 @@ struct UnoccludedSingle {
     bool draw_corrections = false;
     UnoccludedSingle& operator+=(const UnoccludedSingle& o) {
         tables += o.tables;
-        correction += o.correction;
         real += o.real;
+        paths += o.paths;
         paired_tables += o.paired_tables;
         return *this;
     }

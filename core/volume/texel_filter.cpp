@@ -143,13 +143,19 @@ vec3 ratio_correction(const std::vector<SingleCorrectionSums>& sums, size_t i,
         real += sums[j].real;
         paired += sums[j].paired_tables;
     }
-    const float e = kTablesExplainShare, n = float(near.size());
     vec3 out(0.0f);
     for (int c = 0; c < 3; ++c) {
-        const float tables = sums[i].tables[c], below = paired[c] + e * real[c];
-        if (below > 0.0f) out[c] = real[c] * (tables + e * real[c] / n) / below - tables;
+        if (!(paired[c] + kTablesExplainShare * real[c] > 0.0f)) continue;
+        const ExplainedSingle x = explained_single(real[c], paired[c], float(near.size()));
+        out[c] = x.scale * sums[i].tables[c] + x.added - sums[i].tables[c];
     }
     return out;
+}
+
+ExplainedSingle explained_single(float real, float paired, float count) {
+    const float below = paired + kTablesExplainShare * real;
+    if (!(below > 0.0f) || !(count > 0.0f)) return {};
+    return {real / below, kTablesExplainShare * real * real / (count * below)};
 }
 
 IrradianceParts filtered_texel_terms(const std::vector<IrradianceParts>& sums,

@@ -117,10 +117,17 @@ struct SingleCorrectionSums {
 // tables 0.0025 against real parts 5e6 times larger on smoke_room), and the texel leans to the
 // window's mean real part instead of scaling its own tables by an exploding ratio.
 constexpr float kTablesExplainShare = 0.05f;
-// Texel i's correction of its tables T, per channel, from the real parts R and paired tables P
-// summed over `near` (n texels): R (T + e R / n) / (P + e R) - T, e = kTablesExplainShare:
-// T R / P where P >> e R, the window's mean R / n where P << e R; the corrected value is >= 0.
-// 0 where nothing was drawn (R = P = 0).
+// Single scattering from one's own tables T from real parts R drawn beside tables P over n
+// texels or paths: R (T + e R / n) / (P + e R) = scale T + added, e = kTablesExplainShare:
+// T R / P where P >> e R, the mean R / n where P << e R; >= 0. Both 0 where P + e R is not
+// positive (nothing drawn). The texel filter's and the vertex correction field's one formula.
+struct ExplainedSingle {
+    float scale = 0.0f, added = 0.0f;
+};
+ExplainedSingle explained_single(float real, float paired, float count);
+// Texel i's correction of its tables T, per channel, from the real parts and paired tables
+// summed over `near` (n = its size): explained_single's value minus T; 0 where nothing was
+// drawn (the tables kept).
 vec3 ratio_correction(const std::vector<SingleCorrectionSums>& sums, size_t i,
                       const std::vector<size_t>& near);
 // Texel i's filtered terms over `near`: the mean of its sums, plus with `single` its

@@ -88,8 +88,8 @@ class VertexCorrectionField {
         // The correction irradiance, with its surface light's scattering when the vertex
         // continues the path (with_surface_light).
         vec3 value(bool with_surface_light) const;
-        // The corrections of the unoccluded connections over the tables' single scattering of
-        // them (UnoccludedSingle): the vertex adds this times its own tables' value.
+        // The real single scattering of the unoccluded connections over the tables' (regularised
+        // as pack_map says), minus 1: the vertex adds this times its own tables' value.
         vec3 single_ratio() const;
         // Whether the texel's prepass met an unoccluded connection, so that it has a ratio to
         // lend (read with the texel's location: known before the vertex's path runs).
