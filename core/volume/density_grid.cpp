@@ -142,42 +142,71 @@ double horizontal_sum(__m256d v) {
     return _mm_cvtsd_f64(_mm_add_sd(pair, _mm_unpackhi_pd(pair, pair)));
 }
 
-// One axis's crossings for sum_jumps_avx2: as in integral_by_jumps' scalar loop.
-struct JumpAxis {
-    double t0_minus_ta, dt, ub, dub, uc, duc;
-    int res_b, res_c, stride_b, stride_c, base0, dbase, before_offset, after_offset;
+// One axis's crossings, as in the scalar loops: the two other axes' coordinates (in voxels)
+// at the first crossing and their steps per crossing, their border clamps and strides, and
+// the index of the first crossing's voxel pair.
+struct CrossingLine {
+    double u1, du1, u2, du2;
+    int res1, res2, stride1, stride2, base0, dbase, before_offset, after_offset;
 };
 
-// The sum over crossings k < count of (t_k - ta) J_k, four at a time (the last four masked).
-double sum_jumps_avx2(const JumpAxis& a, const float* voxels, int count) {
-    const float* after = voxels + a.after_offset;
-    const float* before = voxels + a.before_offset;
-    const __m256d dub = _mm256_set1_pd(a.dub), ub = _mm256_set1_pd(a.ub);
-    const __m256d duc = _mm256_set1_pd(a.duc), uc = _mm256_set1_pd(a.uc);
-    const __m256d dt = _mm256_set1_pd(a.dt), t0 = _mm256_set1_pd(a.t0_minus_ta);
-    const __m128i lo = _mm_set1_epi32(-1), hi_b = _mm_set1_epi32(a.res_b),
-                  hi_c = _mm_set1_epi32(a.res_c);
-    const __m128i stride_b = _mm_set1_epi32(a.stride_b), stride_c = _mm_set1_epi32(a.stride_c);
-    const __m128i dbase4 = _mm_set1_epi32(4 * a.dbase);
-    __m128i base =
-        _mm_add_epi32(_mm_set1_epi32(a.base0),
-                      _mm_mullo_epi32(_mm_setr_epi32(0, 1, 2, 3), _mm_set1_epi32(a.dbase)));
+// Crossings k .. k + 3 of a line, one per lane: their voxels' index (the voxel before is at
+// before_offset from it, the one after at after_offset) and their first coordinate's voxel.
+class CrossingLanes {
+  public:
+    explicit CrossingLanes(const CrossingLine& x)
+        : u1_(_mm256_set1_pd(x.u1)),
+          du1_(_mm256_set1_pd(x.du1)),
+          u2_(_mm256_set1_pd(x.u2)),
+          du2_(_mm256_set1_pd(x.du2)),
+          hi1_(_mm_set1_epi32(x.res1)),
+          hi2_(_mm_set1_epi32(x.res2)),
+          stride1_(_mm_set1_epi32(x.stride1)),
+          stride2_(_mm_set1_epi32(x.stride2)),
+          dbase4_(_mm_set1_epi32(4 * x.dbase)),
+          base_(_mm_add_epi32(_mm_set1_epi32(x.base0), _mm_mullo_epi32(_mm_setr_epi32(0, 1, 2, 3),
+                                                                       _mm_set1_epi32(x.dbase)))) {}
+    // kd: the lanes' k; *u1 and *c1 (optional): the first coordinate and its voxel.
+    __m128i index(__m256d kd, __m256d* u1 = nullptr, __m128i* c1 = nullptr) const {
+        const __m128i lo = _mm_set1_epi32(-1);
+        const __m256d u = _mm256_fmadd_pd(kd, du1_, u1_);
+        const __m128i first = voxel_of(u, lo, hi1_);
+        const __m128i second = voxel_of(_mm256_fmadd_pd(kd, du2_, u2_), lo, hi2_);
+        if (u1) *u1 = u;
+        if (c1) *c1 = first;
+        return _mm_add_epi32(base_, _mm_add_epi32(_mm_mullo_epi32(first, stride1_),
+                                                  _mm_mullo_epi32(second, stride2_)));
+    }
+    void next() { base_ = _mm_add_epi32(base_, dbase4_); }
+    // The lanes of crossings k .. k + 3 that exist (k < count), as 32-bit masks.
+    static __m128i live(int k, int count) {
+        return _mm_cmpgt_epi32(_mm_set1_epi32(count - k), _mm_setr_epi32(0, 1, 2, 3));
+    }
+
+  private:
+    __m256d u1_, du1_, u2_, du2_;
+    __m128i hi1_, hi2_, stride1_, stride2_, dbase4_, base_;
+};
+
+// The sum over crossings k < count of (t_k - ta) J_k, four at a time (the last four masked):
+// t_k - ta = t0_minus_ta + k dt.
+double sum_jumps_avx2(const CrossingLine& x, double t0_minus_ta, double dt, const float* voxels,
+                      int count) {
+    const float* after = voxels + x.after_offset;
+    const float* before = voxels + x.before_offset;
+    CrossingLanes lanes(x);
+    const __m256d t0 = _mm256_set1_pd(t0_minus_ta), dtv = _mm256_set1_pd(dt);
     __m256d kd = _mm256_setr_pd(0.0, 1.0, 2.0, 3.0);
-    const __m256d four = _mm256_set1_pd(4.0);
     __m256d sum = _mm256_setzero_pd();
-    const __m128i lanes = _mm_setr_epi32(0, 1, 2, 3);
     for (int k = 0; k < count; k += 4) {
-        const __m128 live = _mm_castsi128_ps(_mm_cmpgt_epi32(_mm_set1_epi32(count - k), lanes));
-        const __m128i cb = voxel_of(_mm256_fmadd_pd(kd, dub, ub), lo, hi_b);
-        const __m128i cc = voxel_of(_mm256_fmadd_pd(kd, duc, uc), lo, hi_c);
-        const __m128i index = _mm_add_epi32(
-            base, _mm_add_epi32(_mm_mullo_epi32(cb, stride_b), _mm_mullo_epi32(cc, stride_c)));
+        const __m128 live = _mm_castsi128_ps(CrossingLanes::live(k, count));
+        const __m128i index = lanes.index(kd);
         const __m128 zero = _mm_setzero_ps();
         const __m128 jump = _mm_sub_ps(_mm_mask_i32gather_ps(zero, after, index, live, 4),
                                        _mm_mask_i32gather_ps(zero, before, index, live, 4));
-        sum = _mm256_fmadd_pd(_mm256_fmadd_pd(kd, dt, t0), _mm256_cvtps_pd(jump), sum);
-        base = _mm_add_epi32(base, dbase4);
-        kd = _mm256_add_pd(kd, four);
+        sum = _mm256_fmadd_pd(_mm256_fmadd_pd(kd, dtv, t0), _mm256_cvtps_pd(jump), sum);
+        lanes.next();
+        kd = _mm256_add_pd(kd, _mm256_set1_pd(4.0));
     }
     return horizontal_sum(sum);
 }
@@ -250,22 +279,20 @@ double DensityGrid::integral_by_jumps(const vec3& o, const vec3& d, double t_beg
         // Four crossings a step (AVX2 gathers of their two voxels); the scalar loop stays for
         // builds without AVX2.
         if (int32_indices_) {
-            const JumpAxis axis{t0 - ta,
-                                dt,
-                                ub,
-                                dub,
-                                uc,
-                                duc,
-                                res_b,
-                                res_c,
-                                int(stride_b),
-                                int(stride_c),
-                                int(base0),
-                                int(dbase),
-                                int(before_offset),
-                                int(after_offset)};
+            const CrossingLine line{ub,
+                                    dub,
+                                    uc,
+                                    duc,
+                                    res_b,
+                                    res_c,
+                                    int(stride_b),
+                                    int(stride_c),
+                                    int(base0),
+                                    int(dbase),
+                                    int(before_offset),
+                                    int(after_offset)};
             k = n;
-            jumps = sum_jumps_avx2(axis, voxels, n);
+            jumps = sum_jumps_avx2(line, t0 - ta, dt, voxels, n);
         }
 #endif
         for (; k < n; ++k) {
@@ -284,42 +311,22 @@ double DensityGrid::integral_by_jumps(const vec3& o, const vec3& d, double t_beg
 #if defined(__AVX2__)
 namespace {
 
-// One crossing axis of integral_by_runs: the run axis's and the third axis's coordinates
-// (voxels) at the first crossing and their steps per crossing, and the index arithmetic.
-struct RunCrossings {
-    double ua, dua, uc, duc;
-    int res_a, res_c, stride_a, stride_c, base0, dbase, before_offset, after_offset;
-};
-
 // The sum over crossings k < count of the prefix's jump, four at a time (the last four
-// masked): a 64-bit gather of the voxel's two face prefixes on each side of the crossing,
-// deinterleaved after subtraction.
-double sum_run_jumps_avx2(const RunCrossings& x, const float* runs, int count) {
+// masked): a 64-bit gather of the voxel's two face prefixes on each side of the crossing.
+// The line's first coordinate is the run axis's.
+double sum_run_jumps_avx2(const CrossingLine& x, const float* runs, int count) {
     // The gathers' scale is a float's size: a 64-bit load at any float's index.
     const long long* after = reinterpret_cast<const long long*>(runs + x.after_offset);
     const long long* before = reinterpret_cast<const long long*>(runs + x.before_offset);
-    const __m256d dua = _mm256_set1_pd(x.dua), ua = _mm256_set1_pd(x.ua);
-    const __m256d duc = _mm256_set1_pd(x.duc), uc = _mm256_set1_pd(x.uc);
-    const __m128i lo = _mm_set1_epi32(-1), hi_a = _mm_set1_epi32(x.res_a),
-                  hi_c = _mm_set1_epi32(x.res_c);
-    const __m128i stride_a = _mm_set1_epi32(x.stride_a), stride_c = _mm_set1_epi32(x.stride_c);
-    const __m128i dbase4 = _mm_set1_epi32(4 * x.dbase);
-    __m128i base =
-        _mm_add_epi32(_mm_set1_epi32(x.base0),
-                      _mm_mullo_epi32(_mm_setr_epi32(0, 1, 2, 3), _mm_set1_epi32(x.dbase)));
+    CrossingLanes lanes(x);
     const __m256i split = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
     __m256d kd = _mm256_setr_pd(0.0, 1.0, 2.0, 3.0);
-    const __m256d four = _mm256_set1_pd(4.0);
     __m256d sum = _mm256_setzero_pd();
-    const __m128i lanes = _mm_setr_epi32(0, 1, 2, 3);
     for (int k = 0; k < count; k += 4) {
-        const __m256i live =
-            _mm256_cvtepi32_epi64(_mm_cmpgt_epi32(_mm_set1_epi32(count - k), lanes));
-        const __m256d u = _mm256_fmadd_pd(kd, dua, ua);
-        const __m128i ca = voxel_of(u, lo, hi_a);
-        const __m128i cc = voxel_of(_mm256_fmadd_pd(kd, duc, uc), lo, hi_c);
-        const __m128i index = _mm_add_epi32(
-            base, _mm_add_epi32(_mm_mullo_epi32(ca, stride_a), _mm_mullo_epi32(cc, stride_c)));
+        const __m256i live = _mm256_cvtepi32_epi64(CrossingLanes::live(k, count));
+        __m256d u;
+        __m128i ca;
+        const __m128i index = lanes.index(kd, &u, &ca);
         const __m256i zero = _mm256_setzero_si256();
         // Lanes 0-3: the voxels' near faces' prefixes; 4-7: their far faces'. Subtracted in
         // double, where a difference of floats is exact: a run of empty voxels then sums to
@@ -336,8 +343,8 @@ double sum_run_jumps_avx2(const RunCrossings& x, const float* runs, int count) {
                                          _mm256_cvtps_pd(_mm256_extractf128_ps(b, 1)));
         const __m256d frac = _mm256_sub_pd(u, _mm256_cvtepi32_pd(ca));
         sum = _mm256_add_pd(sum, _mm256_fmadd_pd(frac, _mm256_sub_pd(d1, d0), d0));
-        base = _mm_add_epi32(base, dbase4);
-        kd = _mm256_add_pd(kd, four);
+        lanes.next();
+        kd = _mm256_add_pd(kd, _mm256_set1_pd(4.0));
     }
     return horizontal_sum(sum);
 }
@@ -394,7 +401,7 @@ double DensityGrid::integral_by_runs(const vec3& o, const vec3& d, double t_begi
 #if defined(__AVX2__)
         // Four crossings a step; the scalar loop stays for builds without AVX2 (runs exist
         // only below kMaxRunVoxels, so the indices fit an int).
-        const RunCrossings x{ua,
+        const CrossingLine x{ua,
                              dua,
                              uc,
                              duc,
