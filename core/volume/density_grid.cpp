@@ -129,6 +129,48 @@ double DensityGrid::integral(const vec3& o, const vec3& d, double t_begin, doubl
     return std::abs(prefix(z1, c1) - prefix(z0, c0)) / std::abs(double(d[a]));
 }
 
+namespace {
+
+// Axis b's crossings of a segment from voxel `first` to `last` (u0 + t du in voxels): plane q
+// (between voxels q - 1 and q) is crossed from the voxel before to the one after, and the k-th
+// crossing's time and the other two axes' (1, 2) coordinates are linear in k. `stride`: each
+// axis's index step; the first crossing's pair is at base0 (+ the other axes' voxels' steps).
+struct AxisCrossings {
+    int count = 0;
+    double t0 = 0.0, dt = 0.0;
+    double u1 = 0.0, du1 = 0.0, u2 = 0.0, du2 = 0.0;
+    int res1 = 0, res2 = 0;
+    long stride1 = 0, stride2 = 0, base0 = 0, dbase = 0, before_offset = 0, after_offset = 0;
+};
+
+AxisCrossings axis_crossings(int b, int axis1, int axis2, const glm::dvec3& u0,
+                             const glm::dvec3& du, const ivec3& first, const ivec3& last,
+                             const ivec3& res, const long stride[3]) {
+    AxisCrossings x;
+    x.count = std::abs(last[b] - first[b]);
+    if (x.count == 0) return x;
+    const int step = last[b] > first[b] ? 1 : -1;
+    const int q0 = step > 0 ? first[b] + 1 : first[b];
+    const double inv_du = 1.0 / du[b];
+    x.t0 = (double(q0) - u0[b]) * inv_du;
+    x.dt = double(step) * inv_du;
+    x.u1 = u0[axis1] + x.t0 * du[axis1];
+    x.du1 = x.dt * du[axis1];
+    x.u2 = u0[axis2] + x.t0 * du[axis2];
+    x.du2 = x.dt * du[axis2];
+    x.res1 = res[axis1];
+    x.res2 = res[axis2];
+    x.stride1 = stride[axis1];
+    x.stride2 = stride[axis2];
+    x.before_offset = step > 0 ? -stride[b] : 0;
+    x.after_offset = step > 0 ? 0 : -stride[b];
+    x.base0 = (q0 + 1) * stride[b] + x.stride1 + x.stride2;
+    x.dbase = step * stride[b];
+    return x;
+}
+
+}  // namespace
+
 #if defined(__AVX2__)
 namespace {
 
@@ -142,30 +184,24 @@ double horizontal_sum(__m256d v) {
     return _mm_cvtsd_f64(_mm_add_sd(pair, _mm_unpackhi_pd(pair, pair)));
 }
 
-// One axis's crossings, as in the scalar loops: the two other axes' coordinates (in voxels)
-// at the first crossing and their steps per crossing, their border clamps and strides, and
-// the index of the first crossing's voxel pair.
-struct CrossingLine {
-    double u1, du1, u2, du2;
-    int res1, res2, stride1, stride2, base0, dbase, before_offset, after_offset;
-};
-
 // Crossings k .. k + 3 of a line, one per lane: their voxels' index (the voxel before is at
 // before_offset from it, the one after at after_offset) and their first coordinate's voxel.
 class CrossingLanes {
   public:
-    explicit CrossingLanes(const CrossingLine& x)
+    // (The grid's indices fit an int: the callers check.)
+    explicit CrossingLanes(const AxisCrossings& x)
         : u1_(_mm256_set1_pd(x.u1)),
           du1_(_mm256_set1_pd(x.du1)),
           u2_(_mm256_set1_pd(x.u2)),
           du2_(_mm256_set1_pd(x.du2)),
           hi1_(_mm_set1_epi32(x.res1)),
           hi2_(_mm_set1_epi32(x.res2)),
-          stride1_(_mm_set1_epi32(x.stride1)),
-          stride2_(_mm_set1_epi32(x.stride2)),
-          dbase4_(_mm_set1_epi32(4 * x.dbase)),
-          base_(_mm_add_epi32(_mm_set1_epi32(x.base0), _mm_mullo_epi32(_mm_setr_epi32(0, 1, 2, 3),
-                                                                       _mm_set1_epi32(x.dbase)))) {}
+          stride1_(_mm_set1_epi32(int(x.stride1))),
+          stride2_(_mm_set1_epi32(int(x.stride2))),
+          dbase4_(_mm_set1_epi32(int(4 * x.dbase))),
+          base_(_mm_add_epi32(
+              _mm_set1_epi32(int(x.base0)),
+              _mm_mullo_epi32(_mm_setr_epi32(0, 1, 2, 3), _mm_set1_epi32(int(x.dbase))))) {}
     // kd: the lanes' k; *u1 and *c1 (optional): the first coordinate and its voxel.
     __m128i index(__m256d kd, __m256d* u1 = nullptr, __m128i* c1 = nullptr) const {
         const __m128i lo = _mm_set1_epi32(-1);
@@ -190,8 +226,9 @@ class CrossingLanes {
 
 // The sum over crossings k < count of (t_k - ta) J_k, four at a time (the last four masked):
 // t_k - ta = t0_minus_ta + k dt.
-double sum_jumps_avx2(const CrossingLine& x, double t0_minus_ta, double dt, const float* voxels,
-                      int count) {
+double sum_jumps_avx2(const AxisCrossings& x, double t0_minus_ta, const float* voxels) {
+    const int count = x.count;
+    const double dt = x.dt;
     const float* after = voxels + x.after_offset;
     const float* before = voxels + x.before_offset;
     CrossingLanes lanes(x);
@@ -256,52 +293,26 @@ double DensityGrid::integral_by_jumps(const vec3& o, const vec3& d, double t_beg
     };
     double sum = (tb - ta) * double(voxels[index(last.x, last.y, last.z)]);
     for (int a = 0; a < 3; ++a) {
-        const int n = std::abs(last[a] - first[a]);
-        if (n == 0) continue;
-        const int b = (a + 1) % 3, c = (a + 2) % 3;
-        const int step = last[a] > first[a] ? 1 : -1;
-        // Plane q (between cells q - 1 and q) is crossed from the cell before to the one after;
-        // the k-th crossing's time and the other axes' coordinates are linear in k.
-        const int q0 = step > 0 ? first[a] + 1 : first[a];
-        const double inv_du = 1.0 / du[a];
-        const double t0 = (double(q0) - u0[a]) * inv_du, dt = double(step) * inv_du;
-        const double ub = u0[b] + t0 * du[b], dub = dt * du[b];
-        const double uc = u0[c] + t0 * du[c], duc = dt * du[c];
-        const int res_b = res[b], res_c = res[c];
-        const long stride_b = axis_stride[b], stride_c = axis_stride[c];
-        const long before_offset = step > 0 ? -axis_stride[a] : 0;
-        const long after_offset = step > 0 ? 0 : -axis_stride[a];
-        const long base0 = (q0 + 1) * axis_stride[a] + stride_b + stride_c;
-        const long dbase = step * axis_stride[a];
+        const AxisCrossings x =
+            axis_crossings(a, (a + 1) % 3, (a + 2) % 3, u0, du, first, last, res, axis_stride);
+        if (x.count == 0) continue;
         double jumps = 0.0;
         int k = 0;
 #if defined(__AVX2__)
         // Four crossings a step (AVX2 gathers of their two voxels); the scalar loop stays for
         // builds without AVX2.
         if (int32_indices_) {
-            const CrossingLine line{ub,
-                                    dub,
-                                    uc,
-                                    duc,
-                                    res_b,
-                                    res_c,
-                                    int(stride_b),
-                                    int(stride_c),
-                                    int(base0),
-                                    int(dbase),
-                                    int(before_offset),
-                                    int(after_offset)};
-            k = n;
-            jumps = sum_jumps_avx2(line, t0 - ta, dt, voxels, n);
+            k = x.count;
+            jumps = sum_jumps_avx2(x, x.t0 - ta, voxels);
         }
 #endif
-        for (; k < n; ++k) {
+        for (; k < x.count; ++k) {
             const double kd = double(k);
-            const int cb = std::clamp(int(std::floor(ub + kd * dub)), -1, res_b);
-            const int cc = std::clamp(int(std::floor(uc + kd * duc)), -1, res_c);
-            const long base = base0 + k * dbase + cb * stride_b + cc * stride_c;
-            jumps += (t0 + kd * dt - ta) *
-                     double(voxels[base + after_offset] - voxels[base + before_offset]);
+            const int cb = std::clamp(int(std::floor(x.u1 + kd * x.du1)), -1, x.res1);
+            const int cc = std::clamp(int(std::floor(x.u2 + kd * x.du2)), -1, x.res2);
+            const long base = x.base0 + k * x.dbase + cb * x.stride1 + cc * x.stride2;
+            jumps += (x.t0 + kd * x.dt - ta) *
+                     double(voxels[base + x.after_offset] - voxels[base + x.before_offset]);
         }
         sum -= jumps;
     }
@@ -314,7 +325,8 @@ namespace {
 // The sum over crossings k < count of the prefix's jump, four at a time (the last four
 // masked): a 64-bit gather of the voxel's two face prefixes on each side of the crossing.
 // The line's first coordinate is the run axis's.
-double sum_run_jumps_avx2(const CrossingLine& x, const float* runs, int count) {
+double sum_run_jumps_avx2(const AxisCrossings& x, const float* runs) {
+    const int count = x.count;
     // The gathers' scale is a float's size: a 64-bit load at any float's index.
     const long long* after = reinterpret_cast<const long long*>(runs + x.after_offset);
     const long long* before = reinterpret_cast<const long long*>(runs + x.before_offset);
@@ -381,48 +393,26 @@ double DensityGrid::integral_by_runs(const vec3& o, const vec3& d, double t_begi
     };
     double sum = prefix_at(last, u0[a] + tb * du[a]) - prefix_at(first, u0[a] + ta * du[a]);
     for (int b = 0; b < 3; ++b) {
-        const int n = std::abs(last[b] - first[b]);
-        if (b == a || n == 0) continue;
-        const int c = 3 - a - b;
-        const int step = last[b] > first[b] ? 1 : -1;
-        // Plane q of axis b (between voxels q - 1 and q), crossed from the voxel before to the
-        // one after; the run and third axes' coordinates are linear in the crossing's number k.
-        const int q0 = step > 0 ? first[b] + 1 : first[b];
-        const double t0 = (double(q0) - u0[b]) / du[b], dt = double(step) / du[b];
-        const double ua = u0[a] + t0 * du[a], dua = dt * du[a];
-        const double uc = u0[c] + t0 * du[c], duc = dt * du[c];
-        const long stride_a = run_stride[a], stride_c = run_stride[c];
-        const long before_offset = step > 0 ? -run_stride[b] : 0;
-        const long after_offset = step > 0 ? 0 : -run_stride[b];
-        const long base0 = (q0 + 1) * run_stride[b] + stride_a + stride_c;
-        const long dbase = step * run_stride[b];
+        if (b == a) continue;
+        // The run axis first: its coordinate places the crossing within its voxel.
+        const AxisCrossings x =
+            axis_crossings(b, a, 3 - a - b, u0, du, first, last, res, run_stride);
+        if (x.count == 0) continue;
         double jumps = 0.0;
         int k = 0;
 #if defined(__AVX2__)
         // Four crossings a step; the scalar loop stays for builds without AVX2 (runs exist
         // only below kMaxRunVoxels, so the indices fit an int).
-        const CrossingLine x{ua,
-                             dua,
-                             uc,
-                             duc,
-                             res[a],
-                             res[c],
-                             int(stride_a),
-                             int(stride_c),
-                             int(base0),
-                             int(dbase),
-                             int(before_offset),
-                             int(after_offset)};
-        jumps = sum_run_jumps_avx2(x, run, n);
-        k = n;
+        jumps = sum_run_jumps_avx2(x, run);
+        k = x.count;
 #endif
-        for (; k < n; ++k) {
-            const double u = ua + double(k) * dua;
-            const int ca = std::clamp(int(std::floor(u)), -1, res[a]);
-            const int cc = std::clamp(int(std::floor(uc + double(k) * duc)), -1, res[c]);
-            const long base = base0 + k * dbase + ca * stride_a + cc * stride_c;
-            const float* after = run + base + after_offset;
-            const float* before = run + base + before_offset;
+        for (; k < x.count; ++k) {
+            const double u = x.u1 + double(k) * x.du1;
+            const int ca = std::clamp(int(std::floor(u)), -1, x.res1);
+            const int cc = std::clamp(int(std::floor(x.u2 + double(k) * x.du2)), -1, x.res2);
+            const long base = x.base0 + k * x.dbase + ca * x.stride1 + cc * x.stride2;
+            const float* after = run + base + x.after_offset;
+            const float* before = run + base + x.before_offset;
             const double d0 = double(after[0]) - double(before[0]);
             const double d1 = double(after[1]) - double(before[1]);
             jumps += d0 + (u - double(ca)) * (d1 - d0);
