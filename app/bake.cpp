@@ -200,10 +200,11 @@ void print_texel_paths(const Scene& scene, const TexelFilterUse& use) {
                     parts(r.path).c_str(), double(r.mc_weight), parts(r.deferred).c_str());
         for (const TexelPathRecord::Term& t : r.terms) {
             const Light& light = scene.lights.at(size_t(t.light));
-            std::printf("      light %d (%s) %s, roulette weight %.3g: %s\n", t.light,
-                        to_string(light.type),
-                        t.occluded ? "occluded: lit medium" : "unoccluded: single correction",
-                        double(t.roulette), parts(t.value).c_str());
+            std::printf(
+                "      light %d (%s) %s, roulette weight %.3g: %s\n", t.light,
+                to_string(light.type),
+                t.occluded ? "occluded: lit medium" : "unoccluded: real single scattering drawn",
+                double(t.roulette), parts(t.value).c_str());
         }
         std::printf("      texel walk (multiple scattering, surface light): %s\n",
                     parts(r.walk).c_str());

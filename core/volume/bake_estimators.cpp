@@ -519,7 +519,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
             const float w = emitter_roulette_weight(keep[i], rng);
             if (w == 0.0f) continue;
             IrradianceParts term;
-            vec3 drawn(0.0f);  // the correction drawn (recorded)
+            vec3 drawn(0.0f);  // what the term filed (recorded)
             if (occluded[i].occluded) {
                 add_lit_medium(local[i], p, n, occluded[i].multiple, rng, counters, term,
                                walk_here);
@@ -527,7 +527,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
                 const SingleCorrection drawn_parts =
                     connection_single_correction(local[i], p, n, rng, counters);
                 const vec3 correction = drawn_parts.difference();
-                drawn = correction;
+                drawn = unoccluded ? drawn_parts.real : correction;  // what is filed
                 // The real part filed apart, its ratio to tables applied to a texel's or
                 // vertex's own tables: the field's to the tables of every path of its prepass
                 // (drawn on every path), the texel filter's to the tables of the very
