@@ -526,8 +526,8 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
             } else {
                 const SingleCorrection drawn_parts =
                     connection_single_correction(local[i], p, n, rng, counters);
-                const vec3 correction = drawn_parts.difference();
-                drawn = unoccluded ? drawn_parts.real : correction;  // what is filed
+                // What is filed: the real part apart, or the control variate into the term.
+                drawn = unoccluded ? drawn_parts.real : drawn_parts.difference();
                 // The real part filed apart, its ratio to tables applied to a texel's or
                 // vertex's own tables: the field's to the tables of every path of its prepass
                 // (drawn on every path), the texel filter's to the tables of the very
@@ -544,7 +544,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
                             unoccluded_scatter(local[i], p, n, albedo_lum, rng, counters).single *
                             weight;
                 } else {
-                    term.single += correction;
+                    term.single += drawn;
                 }
             }
             mc.single += term.single * w;

@@ -145,7 +145,6 @@ vec3 ratio_correction(const std::vector<SingleCorrectionSums>& sums, size_t i,
     }
     vec3 out(0.0f);
     for (int c = 0; c < 3; ++c) {
-        if (!(paired[c] + kTablesExplainShare * real[c] > 0.0f)) continue;
         const ExplainedSingle x = explained_single(real[c], paired[c], float(near.size()));
         out[c] = x.scale * sums[i].tables[c] + x.added - sums[i].tables[c];
     }
@@ -154,7 +153,7 @@ vec3 ratio_correction(const std::vector<SingleCorrectionSums>& sums, size_t i,
 
 ExplainedSingle explained_single(float real, float paired, float count) {
     const float below = paired + kTablesExplainShare * real;
-    if (!(below > 0.0f) || !(count > 0.0f)) return {};
+    if (!(below > 0.0f) || !(count > 0.0f)) return {1.0f, 0.0f};  // nothing drawn
     return {real / below, kTablesExplainShare * real * real / (count * below)};
 }
 

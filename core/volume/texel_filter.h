@@ -119,15 +119,15 @@ struct SingleCorrectionSums {
 constexpr float kTablesExplainShare = 0.05f;
 // Single scattering from one's own tables T from real parts R drawn beside tables P over n
 // texels or paths: R (T + e R / n) / (P + e R) = scale T + added, e = kTablesExplainShare:
-// T R / P where P >> e R, the mean R / n where P << e R; >= 0. Both 0 where P + e R is not
-// positive (nothing drawn). The texel filter's and the vertex correction field's one formula.
+// T R / P where P >> e R, the mean R / n where P << e R; >= 0. T itself (scale 1, added 0)
+// where P + e R is not positive: nothing was drawn. The texel filter's and the vertex
+// correction field's one formula.
 struct ExplainedSingle {
-    float scale = 0.0f, added = 0.0f;
+    float scale = 1.0f, added = 0.0f;
 };
 ExplainedSingle explained_single(float real, float paired, float count);
 // Texel i's correction of its tables T, per channel, from the real parts and paired tables
-// summed over `near` (n = its size): explained_single's value minus T; 0 where nothing was
-// drawn (the tables kept).
+// summed over `near` (n = its size): explained_single's value minus T.
 vec3 ratio_correction(const std::vector<SingleCorrectionSums>& sums, size_t i,
                       const std::vector<size_t>& near);
 // Texel i's filtered terms over `near`: the mean of its sums, plus with `single` its

@@ -129,20 +129,30 @@ BENCHMARK(BM_ImpulseIrradianceLookup)->Arg(0)->Arg(1);
 
 namespace {
 
+// Segment origins uniform in a box, directions uniform-ish (a fixed LCG: the same segments in
+// every run and benchmark).
+struct RandomSegments {
+    vec3 lo, hi;
+    uint64_t h = 0x9E3779B97F4A7C15ULL;
+    float next() {
+        h = h * 6364136223846793005ULL + 1442695040888963407ULL;
+        return float(h >> 40) * (1.0f / float(1 << 24));
+    }
+    void draw(vec3* o, vec3* d) {
+        *o = lo + (hi - lo) * vec3(next(), next(), next());
+        *d = glm::normalize(vec3(next() - 0.5f, next() - 0.5f, next() - 0.5f));
+    }
+};
+
 // Media::integrate on segments from random points of the scene's box towards random
 // directions (length 2): a segment's tracking, without its ray.
 void BM_MediaIntegrate(benchmark::State& state) {
     BakeFixture& f = fixture();
-    const vec3 lo = f.rays.bounds_min(), hi = f.rays.bounds_max();
-    uint64_t h = 0x9E3779B97F4A7C15ULL;
-    auto next = [&] {
-        h = h * 6364136223846793005ULL + 1442695040888963407ULL;
-        return float(h >> 40) * (1.0f / float(1 << 24));
-    };
+    RandomSegments segments{f.rays.bounds_min(), f.rays.bounds_max()};
     const double length = std::getenv("BENCH_LEN") ? std::atof(std::getenv("BENCH_LEN")) : 2.0;
     for (auto _ : state) {
-        const vec3 o = lo + (hi - lo) * vec3(next(), next(), next());
-        const vec3 d = glm::normalize(vec3(next() - 0.5f, next() - 0.5f, next() - 0.5f));
+        vec3 o, d;
+        segments.draw(&o, &d);
         benchmark::DoNotOptimize(f.media.integrate(o, d, length));
     }
 }
@@ -153,8 +163,8 @@ BENCHMARK(BM_MediaIntegrate);
 
 namespace {
 
-// The scene's first density grid alone on BM_MediaIntegrate's segments: its integral by jumps
-// (arg 0, every crossing) and by runs (arg 1, the dominant axis's crossings skipped).
+// The scene's first density grid alone on segments from random points of its box: its integral by
+// jumps (arg 0, every crossing) and by runs (arg 1, the dominant axis's crossings skipped).
 void BM_GridIntegral(benchmark::State& state) {
     BakeFixture& f = fixture();
     const DensityGrid* grid = nullptr;
@@ -164,15 +174,10 @@ void BM_GridIntegral(benchmark::State& state) {
         return;
     }
     const bool runs = state.range(0) != 0;
-    const vec3 lo = grid->box_min(), hi = grid->box_max();
-    uint64_t h = 0x9E3779B97F4A7C15ULL;
-    auto next = [&] {
-        h = h * 6364136223846793005ULL + 1442695040888963407ULL;
-        return float(h >> 40) * (1.0f / float(1 << 24));
-    };
+    RandomSegments segments{grid->box_min(), grid->box_max()};
     for (auto _ : state) {
-        const vec3 o = lo + (hi - lo) * vec3(next(), next(), next());
-        const vec3 d = glm::normalize(vec3(next() - 0.5f, next() - 0.5f, next() - 0.5f));
+        vec3 o, d;
+        segments.draw(&o, &d);
         benchmark::DoNotOptimize(runs ? grid->integral_by_runs(o, d, 0.0, 2.0)
                                       : grid->integral_by_jumps(o, d, 0.0, 2.0));
     }
