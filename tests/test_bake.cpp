@@ -256,7 +256,8 @@ TEST(Bake, FixedDirectLightIsReusedExactly) {
 
 // A re-bake after a slider change (Media::set_coefficients, then reset) equals a fresh bake of
 // the changed media: nothing the estimator resolved per medium (its table) outlives the change,
-// and the change does show (the albedo and g of the fog both move).
+// and the change does show (the albedo and g of the fog both move). The vertex correction
+// field's geometry (its rays) is what the re-bake keeps, and it does keep it.
 TEST(Bake, ReBakeAfterACoefficientChangeEqualsAFreshBake) {
     Fixture f(receiver_scene("0.6", R"([{"sigma_s": 0.3, "sigma_a": 0.05, "g": 0.1}])"));
     BakeSettings s;
@@ -267,9 +268,14 @@ TEST(Bake, ReBakeAfterACoefficientChangeEqualsAFreshBake) {
     LightmapBaker rebake(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
     rebake.run();
     const std::vector<float> before = rebake.layers(0).get("lm_inscatter_single").data;
+    ASSERT_NE(rebake.vertex_corrections(), nullptr);
+    // Held here, so that a geometry traced anew could not take its address.
+    const std::shared_ptr<const VertexCorrectionField::Geometry> geometry =
+        rebake.vertex_corrections()->geometry();
     f.media.set_coefficients(0, 0.6, 0.02, 0.4, 1.0);
     rebake.reset();
     rebake.run();
+    EXPECT_EQ(rebake.vertex_corrections()->geometry(), geometry);
     LightmapBaker fresh(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
     fresh.run();
     const std::vector<float> after = rebake.layers(0).get("lm_inscatter_single").data;

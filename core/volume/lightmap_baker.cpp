@@ -124,6 +124,7 @@ void LightmapBaker::reset() {
     for (size_t i = 0; i < maps_.size(); ++i) fixed_[i].assign(maps_[i].texels.size(), {});
     probe_sums_.assign(probe_positions_.size(), {});
     estimator_.set_vertex_corrections(nullptr);
+    if (corrections_) field_geometry_ = corrections_->geometry();
     corrections_.reset();
     stats_.corrections_ms = 0.0;
     stats_.correction_paths = 0;
@@ -141,8 +142,8 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
     if (samples_ == 0 && !corrections_ &&
         uses_vertex_corrections(method_, settings_, tables_, media_)) {
         // Before the first path: deeper vertices read it (volume/vertex_corrections.h).
-        corrections_ =
-            std::make_unique<VertexCorrectionField>(scene_, media_, tables_, settings_, maps_);
+        corrections_ = std::make_unique<VertexCorrectionField>(scene_, media_, tables_, settings_,
+                                                               maps_, field_geometry_);
         estimator_.set_vertex_corrections(corrections_.get());
         stats_.corrections_ms = ms_since(t0);
         stats_.correction_paths = corrections_->paths_per_texel();

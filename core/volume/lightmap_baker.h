@@ -110,6 +110,8 @@ class LightmapBaker {
     // Per lightmap, per texel: its paths' shared direct light (BakeEstimator::FixedDirect).
     std::vector<std::vector<BakeEstimator::FixedDirect>> fixed_;
     std::unique_ptr<VertexCorrectionField> corrections_;
+    // The field's geometry, kept by reset(): a media change re-runs its prepass, not its rays.
+    std::shared_ptr<const VertexCorrectionField::Geometry> field_geometry_;
     std::vector<vec3> probe_positions_;
     ivec3 probe_grid_{0};  // the probes laid out (0: none, e.g. a scene without geometry)
     std::vector<BakeEstimator::ProbeParts> probe_sums_;

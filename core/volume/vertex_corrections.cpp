@@ -145,9 +145,34 @@ struct VertexCorrectionField::MapTerms {
     TexelFilterGuide guide;  // per texel
 };
 
+VertexCorrectionField::Geometry VertexCorrectionField::trace_geometry(
+    const RayScene& rays, const std::vector<ObjectLightmap>& maps) {
+    Geometry g;
+    g.triangles.resize(maps.size());
+    g.straddles.resize(maps.size());
+    g.cover_mixed.resize(maps.size());
+    tbb::parallel_for(size_t(0), maps.size(), [&](size_t mi) {
+        const ObjectLightmap& map = maps[mi];
+        g.triangles[mi].resize(map.triangle_uv.size() / 3);
+        tbb::parallel_for(size_t(0), g.triangles[mi].size(),
+                          [&](size_t t) { g.triangles[mi][t] = triangle_to_texels(rays, map, t); });
+        std::vector<uint32_t> valid;  // the rows of estimate_map: valid texels in texel order
+        for (size_t i = 0; i < map.texels.size(); ++i)
+            if (map.texels[i].state == TexelState::Valid) valid.push_back(uint32_t(i));
+        std::vector<char>&straddles = g.straddles[mi], &mixed = g.cover_mixed[mi];
+        straddles.assign(valid.size(), 0);
+        mixed.assign(valid.size(), 0);
+        tbb::parallel_for(size_t(0), valid.size(), [&](size_t r) {
+            mixed[r] = cover_mixed(rays, map, valid[r]);
+            straddles[r] = mixed[r] || straddles_geometry(rays, map, valid[r]);
+        });
+    });
+    return g;
+}
+
 VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
-    const RayScene& rays, const BakeEstimator& estimator, const ObjectLightmap& map, uint64_t key,
-    int seed, std::atomic<long>& rays_cast, std::atomic<long>& computed) const {
+    const RayScene& rays, const BakeEstimator& estimator, const ObjectLightmap& map, size_t mi,
+    uint64_t key, int seed, std::atomic<long>& rays_cast, std::atomic<long>& computed) const {
     const size_t n = map.texels.size();
     MapTerms m;
     m.row.assign(n, kNoRow);
@@ -160,8 +185,8 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
     m.deferred.resize(rows);
     m.unoccluded.resize(rows);
     m.gated.assign(rows, 0);
-    m.straddles.assign(rows, 0);
-    m.cover_mixed.assign(rows, 0);
+    m.straddles = geometry_->straddles[mi];
+    m.cover_mixed = geometry_->cover_mixed[mi];
     m.guide = TexelFilterGuide::sized(n);
     std::vector<char> done(n, 0);  // by texel: the filter's `among`
     auto run = [&](size_t r) {
@@ -184,10 +209,6 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
         ++computed;
     };
     const int w = map.width, stride = kFieldStride;
-    tbb::parallel_for(size_t(0), rows, [&](size_t r) {
-        m.cover_mixed[r] = cover_mixed(rays, map, m.texel[r]);
-        m.straddles[r] = m.cover_mixed[r] || straddles_geometry(rays, map, m.texel[r]);
-    });
     // Neighbours in the atlas stand for a texel when they face its way, are covered as it is
     // and, where geometry crosses either footprint, see it (not the eave's light for the attic
     // behind the wall). Cover: at 1 texel/unit valley's terrain texels in the 0.09-unit gap
@@ -339,8 +360,11 @@ long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& 
 VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& media,
                                              const ImpulseTables* tables,
                                              const BakeSettings& settings,
-                                             const std::vector<ObjectLightmap>& maps)
-    : maps_(&maps) {
+                                             const std::vector<ObjectLightmap>& maps,
+                                             std::shared_ptr<const Geometry> geometry)
+    : maps_(&maps),
+      geometry_(geometry ? std::move(geometry)
+                         : std::make_shared<const Geometry>(trace_geometry(rays, maps))) {
     // The texels' own Monte Carlo terms, on every path (set_field_prepass: no indirect segment
     // at the texel; the walk's surface light filed apart).
     BakeSettings pre = settings;
@@ -358,7 +382,6 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
     map_of_object_.assign(rays.scene().objects.size(), -1);
     lookup_ = LightmapLookup(maps, rays.scene().objects.size());
     packed_.resize(maps.size());
-    triangles_.resize(maps.size());
     std::atomic<long> rays_cast{0}, computed{0}, straddling{0};
     scene_ = &rays;
     for (size_t mi = 0; mi < maps.size(); ++mi) {
@@ -371,11 +394,8 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
     // the field does not depend on the order.
     tbb::parallel_for(size_t(0), maps.size(), [&](size_t mi) {
         const ObjectLightmap& map = maps[mi];
-        triangles_[mi].resize(map.triangle_uv.size() / 3);
-        tbb::parallel_for(size_t(0), triangles_[mi].size(),
-                          [&](size_t t) { triangles_[mi][t] = triangle_to_texels(rays, map, t); });
         // Keyed apart from the bake's lightmaps and probes (maps.size()).
-        const MapTerms terms = estimate_map(rays, estimator, map, maps.size() + 1 + mi,
+        const MapTerms terms = estimate_map(rays, estimator, map, mi, maps.size() + 1 + mi,
                                             settings.seed, rays_cast, computed);
         straddling += pack_map(map, terms, paths_, packed_[mi]);
     });
@@ -394,7 +414,7 @@ VertexCorrectionField::Texel VertexCorrectionField::locate(const SurfaceHit& hit
     int mi = map_of_object_[size_t(hit.object)];
     if (mi == kSeveralPages) mi = lookup_.find(hit.object, hit.primitive);
     if (mi < 0) return texel;
-    const std::vector<TriangleToTexels>& tris = triangles_[size_t(mi)];
+    const std::vector<TriangleToTexels>& tris = geometry_->triangles[size_t(mi)];
     if (hit.primitive < 0 || size_t(hit.primitive) >= tris.size()) return texel;
     const vec2 uv = tris[size_t(hit.primitive)].uv(hit.position);
     // The nearest texel (a valid one, or no field): one cache line, where a bilinear

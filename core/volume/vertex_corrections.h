@@ -56,6 +56,7 @@
 #pragma once
 
 #include <atomic>
+#include <memory>
 #include <vector>
 
 #include "accel/ray_scene.h"
@@ -75,10 +76,22 @@ bool uses_vertex_corrections(BakeMethod method, const BakeSettings& settings,
 
 class VertexCorrectionField {
   public:
+    // What the field takes from the atlases' geometry alone (no media, no light): per map, its
+    // mesh triangles' texel mapping, and per valid texel whether geometry crosses its footprint
+    // or its cover is mixed (rays). A re-bake after a media change (the sliders) keeps it: on
+    // cornell_fog at 64 texels/unit its rays were a fifth of the prepass that the re-bake's
+    // first pass waits for.
+    struct Geometry {
+        std::vector<std::vector<TriangleToTexels>> triangles;   // per map, per mesh triangle
+        std::vector<std::vector<char>> straddles, cover_mixed;  // per map, per valid texel
+    };
     VertexCorrectionField() = default;
-    // Estimates the field over `maps` (kept by reference: the baker's atlases).
+    // Estimates the field over `maps` (kept by reference: the baker's atlases). `geometry`:
+    // a field's over the same maps and scene (geometry()), or null to trace it.
     VertexCorrectionField(const RayScene& rays, const Media& media, const ImpulseTables* tables,
-                          const BakeSettings& settings, const std::vector<ObjectLightmap>& maps);
+                          const BakeSettings& settings, const std::vector<ObjectLightmap>& maps,
+                          std::shared_ptr<const Geometry> geometry = nullptr);
+    const std::shared_ptr<const Geometry>& geometry() const { return geometry_; }
     // Where the field holds a surface hit's value: found() is false when its object has no
     // lightmap. Locating prefetches the texel; value() reads it, best after other work (the
     // read is a cache miss, ~40 ns, that the vertex's own path hides).
@@ -122,8 +135,8 @@ class VertexCorrectionField {
 
   private:
     const std::vector<ObjectLightmap>* maps_ = nullptr;
-    std::vector<std::vector<TriangleToTexels>> triangles_;  // per map, per mesh triangle
-    // (precomputed: a lookup is ~30 flops)
+    // Its triangles' texel mapping precomputed: a lookup is ~30 flops.
+    std::shared_ptr<const Geometry> geometry_;
     // Per object: its map, -1 none, kSeveralPages: ask lookup_ (pages, volume/lightmap_atlas.h),
     // so that an object of one map costs the hot path no more than before pages.
     static constexpr int kSeveralPages = -2;
@@ -179,8 +192,9 @@ class VertexCorrectionField {
     // straddling texels).
     struct MapTerms;
     MapTerms estimate_map(const RayScene& rays, const BakeEstimator& estimator,
-                          const ObjectLightmap& map, uint64_t key, int seed,
+                          const ObjectLightmap& map, size_t mi, uint64_t key, int seed,
                           std::atomic<long>& rays_cast, std::atomic<long>& computed) const;
+    static Geometry trace_geometry(const RayScene& rays, const std::vector<ObjectLightmap>& maps);
     static long pack_map(const ObjectLightmap& map, const MapTerms& terms, int paths,
                          PackedMap& packed);
     int paths_ = 0;
