@@ -105,6 +105,14 @@ bool cover_mixed(const RayScene& rays, const ObjectLightmap& map, size_t i) {
     return false;
 }
 
+// The map's valid texels in texel order: the field's rows (MapTerms, Geometry).
+std::vector<uint32_t> valid_texels(const ObjectLightmap& map) {
+    std::vector<uint32_t> out;
+    for (size_t i = 0; i < map.texels.size(); ++i)
+        if (map.texels[i].state == TexelState::Valid) out.push_back(uint32_t(i));
+    return out;
+}
+
 // Whether the segment between two points is clear.
 bool sees(const RayScene& rays, const vec3& from, const vec3& to) {
     const vec3 d = to - from;
@@ -156,9 +164,7 @@ VertexCorrectionField::Geometry VertexCorrectionField::trace_geometry(
         g.triangles[mi].resize(map.triangle_uv.size() / 3);
         tbb::parallel_for(size_t(0), g.triangles[mi].size(),
                           [&](size_t t) { g.triangles[mi][t] = triangle_to_texels(rays, map, t); });
-        std::vector<uint32_t> valid;  // the rows of estimate_map: valid texels in texel order
-        for (size_t i = 0; i < map.texels.size(); ++i)
-            if (map.texels[i].state == TexelState::Valid) valid.push_back(uint32_t(i));
+        const std::vector<uint32_t> valid = valid_texels(map);  // estimate_map's rows
         std::vector<char>&straddles = g.straddles[mi], &mixed = g.cover_mixed[mi];
         straddles.assign(valid.size(), 0);
         mixed.assign(valid.size(), 0);
@@ -175,12 +181,9 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
     uint64_t key, int seed, std::atomic<long>& rays_cast, std::atomic<long>& computed) const {
     const size_t n = map.texels.size();
     MapTerms m;
+    m.texel = valid_texels(map);
     m.row.assign(n, kNoRow);
-    for (size_t i = 0; i < n; ++i)
-        if (map.texels[i].state == TexelState::Valid) {
-            m.row[i] = uint32_t(m.texel.size());
-            m.texel.push_back(uint32_t(i));
-        }
+    for (size_t r = 0; r < m.texel.size(); ++r) m.row[m.texel[r]] = uint32_t(r);
     const size_t rows = m.texel.size();
     m.deferred.resize(rows);
     m.unoccluded.resize(rows);
