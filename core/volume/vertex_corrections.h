@@ -43,7 +43,9 @@
 // ring outside a chart, texels inside geometry): that ring, dilated from the chart's texels,
 // held for any hit, and valley's hits in the closed cavities of layered IFC walls read lit
 // walls' values there (relMSE 2.11 -> 1.90, seed 0). The field is fixed during the bake, so
-// the bake stays deterministic and --debug-texel re-runs it exactly.
+// the bake stays deterministic and --debug-texel re-runs it exactly. A re-bake after a media
+// change (LightmapBaker::reset) keeps its Geometry (straddle and cover rays, the triangles'
+// texel mapping) and re-runs its prepass.
 //
 // | parameter           | meaning                                                          |
 // |---------------------|------------------------------------------------------------------|
