@@ -189,6 +189,15 @@ void print_texel_paths(const Scene& scene, const TexelFilterUse& use) {
                     parts(b.vertex).c_str(), field);
     };
     std::printf("  the texel's paths (surface / single / multiple, luminance):\n");
+    if (const TexelPathRecord::TexelField& f = use.paths.front().texel_field; f.read)
+        std::printf(
+            "    the texel reads the field at itself (bake.texel_terms = field): to path 0 "
+            "it added %.4g (its value, and its ratio x the path's tables)%s%s\n",
+            double(luminance(f.added)),
+            f.holds ? ""
+                    : " (its shadows differ from the field's there: nothing, and "
+                      "the tables' multiple scattering kept)",
+            f.drew_corrections ? "; no ratio there: the paths drew their own corrections" : "");
     int quiet = 0;
     for (size_t s = 0; s < use.paths.size(); ++s) {
         const TexelPathRecord& r = use.paths[s];

@@ -210,17 +210,23 @@ TEST(Bake, ProgressivePassesGiveTheSameLightmap) {
     s.bounces = 1;
     const ImpulseTables& tables = test_support::shared_impulse_tables();
     s.media_bounces = tables.bounces();
-    for (BakeMethod m : {BakeMethod::Impulse, BakeMethod::Vpt}) {
+    // Impulse with the texels' own Monte Carlo terms and reading the field (texel_terms).
+    for (const auto& [m, terms] : {std::pair{BakeMethod::Impulse, TexelTerms::Own},
+                                   std::pair{BakeMethod::Impulse, TexelTerms::Field},
+                                   std::pair{BakeMethod::Vpt, TexelTerms::Own}}) {
+        s.texel_terms = terms;
+        const std::string name =
+            std::string(to_string(m)) + (terms == TexelTerms::Field ? " field" : "");
         LightmapBaker once(*f.rays, f.media, &tables, m, s);
         once.run_pass(7);
         LightmapBaker passes(*f.rays, f.media, &tables, m, s);
         passes.run();  // 1 + 2 + 4
         EXPECT_EQ(passes.samples(), 7);
         const LayerSet a = once.layers(0), b = passes.layers(0);
-        EXPECT_EQ(a.get("lm_total").data, b.get("lm_total").data) << to_string(m);
+        EXPECT_EQ(a.get("lm_total").data, b.get("lm_total").data) << name;
         double multiple = 0.0;
         for (float v : a.get("lm_inscatter_multiple").data) multiple += v;
-        EXPECT_GT(multiple, 0.0) << to_string(m);  // media_bounces >= 2 reaches it
+        EXPECT_GT(multiple, 0.0) << name;  // media_bounces >= 2 reaches it
     }
 }
 
@@ -499,6 +505,57 @@ TEST(Bake, TexelEstimateIsWhatTheBakeStoredOnEveryLightmap) {
     }
     EXPECT_GE(checked, 20);
     EXPECT_GT(differs_as_lightmap0, checked / 2);
+}
+
+// bake.texel_terms = field: a texel reads the vertex correction field at itself instead of
+// running its own Monte Carlo terms. texel_estimate (--debug-texel) re-runs it through the same
+// BakeEstimator::estimate_texel: what the bake stored, each path recording what it read.
+TEST(Bake, TexelsReadingTheFieldAreWhatTheBakeStoredAndTheirPathsSaySo) {
+    Fixture f(R"({"frames": 1, "camera": {"position": [0, -5, 3], "look_at": [0, 0, 0]},
+      "materials": {"m": {"type": "lambert", "albedo": 0.7}},
+      "objects": [{"shape": {"type": "plane", "size": [4, 4]}, "material": "m"},
+                  {"shape": {"type": "box", "size": [1, 1, 1]}, "material": "m",
+                   "transform": {"translate": [0.8, 0, 0.5]}}],
+      "lights": [{"type": "point", "position": [-0.5, -0.5, 2.0], "intensity": 8}],
+      "media": [{"sigma_s": 0.4, "sigma_a": 0.05, "g": 0.3,
+                 "bounds": {"box": {"min": [-2, -2, 0], "max": [2, 2, 2.5]}}}]})");
+    const ImpulseTables& tables = test_support::shared_impulse_tables();
+    BakeSettings s;
+    s.spp = 8;
+    s.bounces = 1;
+    s.texel_density = 4.0f;
+    s.texel_terms = TexelTerms::Field;
+    s.probes_x = 0;
+    LightmapBaker baker(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
+    baker.run();
+    EXPECT_EQ(baker.stats().texel_terms, "field");
+    const ObjectLightmap& floor = baker.lightmaps()[0];
+    const LayerSet baked = baker.layers(0);
+    const Layer& stored = baked.get("lm_irradiance");
+    BakeEstimator estimator(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
+    EXPECT_FALSE(estimator.texel_reads_field());  // no field yet: the texels run their own
+    estimator.set_vertex_corrections(baker.vertex_corrections());
+    ASSERT_TRUE(estimator.texel_reads_field());
+    int checked = 0, added = 0;
+    for (size_t i = 0; i < floor.texels.size() && checked < 30; i += 5) {
+        if (floor.texels[i].state != TexelState::Valid) continue;
+        ++checked;
+        TexelFilterUse use;
+        const float mine =
+            texel_estimate(estimator, baker.lightmaps(), 0, i, s.seed, s.spp, &use).total().x;
+        const float baked_value = stored.data[i * 3];
+        EXPECT_NEAR(mine, baked_value, 1e-5f * std::max(1.0f, baked_value)) << "texel " << i;
+        ASSERT_EQ(use.paths.size(), size_t(s.spp));
+        for (const TexelPathRecord& r : use.paths) {
+            EXPECT_TRUE(r.texel_field.read);
+            EXPECT_FALSE(r.mc_ran);  // no Monte Carlo terms of its own
+            EXPECT_EQ(luminance(r.deferred.total()), 0.0f);
+        }
+        added += use.paths.front().texel_field.holds &&
+                 luminance(use.paths.front().texel_field.added) > 0.0f;
+    }
+    EXPECT_GE(checked, 20);
+    EXPECT_GE(added, checked / 2);  // the field brought the lit medium and the walk's light
 }
 
 // Impulse defers its Monte Carlo terms and the baker filters them over neighbouring texels

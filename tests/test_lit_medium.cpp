@@ -272,22 +272,29 @@ TEST(LitMedium, ShadowedTexelsAreTheCastShadowOfTheKeyLight) {
 
 // The analytic scene itself (scenes/analytic/haze_occluder.json): its floor baked by impulse
 // and VPT, compared over the umbra (the shadowed texels) and the far field (the rest).
-// Single scattering without surface bounces is what the lit-medium estimate is unbiased for:
-// the umbra's mean must match VPT's within the two bakes' noise. With everything on (orders 2+,
-// surface bounces: the lit floor's light scattered back into the umbra), within 10 % (it held
-// 10 % of VPT's light when occluded connections brought no scattered light).
-TEST(LitMedium, HazeOccluderFloorUmbraAgainstVpt) {
-    const Scene scene =
+struct HazeOccluderFloor {
+    Scene scene =
         load_scene(std::string(FREQLAB_SOURCE_DIR) + "/scenes/analytic/haze_occluder.json");
-    const Media media(scene.media);
+    Media media{scene.media};
     EmbreeDevice device{2};
-    RayScene rays(scene, device);
-    rays.update(0.0f);
-    const ImpulseTables& tables = test_support::shared_impulse_tables();
-    const BakeKeyLight key = bake_key_light(rays);
-    auto umbra = [&](BakeSettings s, int impulse_spp, int vpt_spp) {
+    RayScene rays{scene, device};
+    BakeKeyLight key;
+    HazeOccluderFloor() {
+        rays.update(0.0f);
+        key = bake_key_light(rays);
+    }
+    struct Regions {
+        RegionComparison umbra, far;
+        std::string texel_terms;          // what the impulse bake ran (BakeStats::texel_terms)
+        double far_multiple_ratio = 0.0;  // lm_inscatter_multiple over the far field, / VPT's
+    };
+    // Impulse at `impulse_spp` (bake.spp too: the field's prepass paths follow it) against
+    // VPT at `vpt_spp`, 4 texels/unit.
+    Regions compare(BakeSettings s, int impulse_spp, int vpt_spp) const {
+        const ImpulseTables& tables = test_support::shared_impulse_tables();
         s.texel_density = 4.0f;
         s.probes_x = s.probes_y = s.probes_z = 0;
+        s.spp = impulse_spp;
         LightmapBaker impulse(rays, media, &tables, BakeMethod::Impulse, s);
         impulse.run_pass(impulse_spp);
         s.seed = 7919;
@@ -296,14 +303,24 @@ TEST(LitMedium, HazeOccluderFloorUmbraAgainstVpt) {
         const std::vector<uint8_t> mask = shadowed_texels(rays, impulse.lightmaps()[0], key);
         std::vector<uint8_t> far(mask.size());
         for (size_t i = 0; i < mask.size(); ++i) far[i] = mask[i] ? 0 : 1;
-        return std::pair{compare_region(impulse.layers(0), vpt.layers(0), mask),
-                         compare_region(impulse.layers(0), vpt.layers(0), far)};
-    };
+        const LayerSet a = impulse.layers(0), b = vpt.layers(0);
+        return {compare_region(a, b, mask), compare_region(a, b, far), impulse.stats().texel_terms,
+                valid_texel_luminance_sum(a, "lm_inscatter_multiple", &far) /
+                    valid_texel_luminance_sum(b, "lm_inscatter_multiple", &far)};
+    }
+};
+
+// Single scattering without surface bounces is what the lit-medium estimate is unbiased for:
+// the umbra's mean must match VPT's within the two bakes' noise. With everything on (orders 2+,
+// surface bounces: the lit floor's light scattered back into the umbra), within 10 % (it held
+// 10 % of VPT's light when occluded connections brought no scattered light).
+TEST(LitMedium, HazeOccluderFloorUmbraAgainstVpt) {
+    const HazeOccluderFloor floor;
     BakeSettings single;
     single.bounces = 0;
     single.media_bounces = 1;
     single.texel_mc_rate = 1.0f;  // the estimate itself (its roulette has a test of its own)
-    const auto [u1, f1] = umbra(single, 256, 1024);
+    const auto [u1, f1, terms1, multiple1] = floor.compare(single, 256, 1024);
     std::printf(
         "single scattering: umbra (%ld texels) impulse %.4f vpt %.4f; far field %.4f / %.4f\n",
         u1.texels, u1.test_irradiance, u1.ref_irradiance, f1.test_irradiance, f1.ref_irradiance);
@@ -311,13 +328,52 @@ TEST(LitMedium, HazeOccluderFloorUmbraAgainstVpt) {
     EXPECT_NEAR(u1.irradiance_ratio, 1.0, 0.03);
     // The defaults: the Monte Carlo terms on 1 path in 50, filtered over neighbouring texels;
     // at 256 spp that is ~5 per texel (ratio 0.85 at 1 in 32), at 1024 ~20.
-    const auto [u, f] = umbra(BakeSettings{}, 1024, 2048);
+    const auto [u, f, terms, multiple] = floor.compare(BakeSettings{}, 1024, 2048);
+    EXPECT_EQ(terms, "own");
     std::printf("all light: umbra impulse %.4f vpt %.4f (ratio %.3f); far field ratio %.3f\n",
                 u.test_irradiance, u.ref_irradiance, u.irradiance_ratio, f.irradiance_ratio);
     // Issue "Method B, part 3", acceptance 1: within 10 % of VPT over the umbra. It read 0.64
     // with order 2 as "the unoccluded multiple where the point drawn is lit" and without the
     // light of the floor around the umbra scattered back (hidden_surface_light).
     EXPECT_NEAR(u.irradiance_ratio, 1.0, 0.1);
+}
+
+// bake.texel_terms = field (the quality presets'): the texels read the vertex correction
+// field's Monte Carlo terms at themselves instead of running their own. The same bounds as
+// their own terms over the umbra (measured 1.056; own 1.013), the far field's in-scattered
+// light within 10 % (0.969) and its split into single and multiple scattering as VPT's (the
+// field reported it all as single: lm_inscatter_multiple read 0; now 0.961).
+TEST(LitMedium, HazeOccluderFloorWithTexelsReadingTheFieldAgainstVpt) {
+    const HazeOccluderFloor floor;
+    BakeSettings s;
+    s.texel_terms = TexelTerms::Field;
+    const auto [u, f, terms, multiple] = floor.compare(s, 1024, 2048);
+    EXPECT_EQ(terms, "field");
+    std::printf(
+        "umbra impulse %.4f vpt %.4f (ratio %.3f, in-scattered %.3f); far field ratio %.3f "
+        "(in-scattered %.3f, its multiple part %.3f)\n",
+        u.test_irradiance, u.ref_irradiance, u.irradiance_ratio, u.inscatter_ratio,
+        f.irradiance_ratio, f.inscatter_ratio, multiple);
+    EXPECT_NEAR(u.irradiance_ratio, 1.0, 0.1);
+    EXPECT_NEAR(f.inscatter_ratio, 1.0, 0.1);
+    EXPECT_NEAR(multiple, 1.0, 0.15);
+}
+
+// Without single_correction the field lends no ratio: one of -1 (no real parts over the
+// tables) took the tables' single scattering from every vertex reading it, and from the
+// texels that read it: the far field's in-scattered light 0.37x VPT's. Texels reading the
+// field then get what their own terms give (both uncorrected tables: ~1.1x VPT's there).
+TEST(LitMedium, WithoutSingleCorrectionTheFieldKeepsTheTablesSingleScattering) {
+    const HazeOccluderFloor floor;
+    BakeSettings s;
+    s.single_correction = false;
+    const auto own = floor.compare(s, 256, 256);
+    s.texel_terms = TexelTerms::Field;
+    const auto field = floor.compare(s, 256, 256);
+    const double ratio = field.far.test_inscatter / own.far.test_inscatter;
+    std::printf("far field in-scattered light: field %.4f own %.4f (ratio %.3f), vpt %.4f\n",
+                field.far.test_inscatter, own.far.test_inscatter, ratio, own.far.ref_inscatter);
+    EXPECT_NEAR(ratio, 1.0, 0.05);
 }
 
 // bake.media_bounces = 1 is single scattering only: no estimate of impulse's may bring light

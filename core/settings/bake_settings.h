@@ -16,6 +16,8 @@ enum class Tracking { Exact, Ratio };
 enum class TexelMultiple { Walk, Tables };
 // Where impulse's in-scattered light of other surfaces at a texel comes from.
 enum class TexelSurfaceLight { Walk, Tables };
+// Where impulse's Monte Carlo terms at the texel itself come from (issue "Method B, part 4").
+enum class TexelTerms { Own, Field };
 // A preset of spp, bounces and texel density (BakeSettings::schema()).
 enum class BakeQuality { Custom, Low, High };
 
@@ -44,6 +46,9 @@ struct BakeSettings {
     // Impulse: deeper path vertices read the texels' Monte Carlo terms of their emitters,
     // estimated before the bake (volume/vertex_corrections.h).
     bool vertex_corrections = true;
+    // Impulse: the texel itself reads the field's Monte Carlo terms, as deeper vertices do,
+    // instead of running its own on texel_mc_rate of its paths (the quality presets' choice).
+    TexelTerms texel_terms = TexelTerms::Own;
     // Impulse, at the texel: the fraction of paths on which the Monte Carlo terms through the
     // real media run (single-scattering corrections, hidden surfaces' light, the multiple-
     // scattering walk), weighted up by its inverse (Russian roulette: unbiased at any spp).

@@ -7,6 +7,7 @@
 // integral and in range when set.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <functional>
@@ -143,7 +144,14 @@ class SchemaBuilder {
                 auto set = other->set;
                 writes[i].push_back([set, v = v](void* o) { set(o, v); });
                 char buf[64];
-                std::snprintf(buf, sizeof buf, "%s%s %g", line.empty() ? "" : ", ", k.c_str(), v);
+                // A choice's value by its name (its index is what the preset stores).
+                const size_t index = size_t(std::max(0.0, v));
+                if (other->type == SettingType::Choice && index < other->choices.size())
+                    std::snprintf(buf, sizeof buf, "%s%s %s", line.empty() ? "" : ", ", k.c_str(),
+                                  other->choices[index].c_str());
+                else
+                    std::snprintf(buf, sizeof buf, "%s%s %g", line.empty() ? "" : ", ", k.c_str(),
+                                  v);
                 line += buf;
             }
             if (!line.empty()) listing += "\n" + names[i] + ": " + line;

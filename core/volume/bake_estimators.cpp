@@ -191,7 +191,8 @@ IrradianceParts BakeEstimator::estimate(const vec3& p, const vec3& n, const vec3
                                                reuse ? fixed : nullptr, deferred ? &later : nullptr,
                                                false, mc_rate, unoccluded ? &single : nullptr);
     if (!all_finite(parts.total()) || !all_finite(later.total()) ||
-        !all_finite(single.tables + single.real + single.paired_tables)) {
+        !all_finite(single.tables + single.real + single.paired_tables +
+                    single.surface_light_multiple)) {
         ++counters.guarded;
         return {};
     }
@@ -201,6 +202,42 @@ IrradianceParts BakeEstimator::estimate(const vec3& p, const vec3& n, const vec3
         *unoccluded += single;
     }
     return parts;
+}
+
+IrradianceParts BakeEstimator::estimate_texel(const LightmapTexel& t, size_t map, size_t texel,
+                                              CounterRng& rng, BakeCounters& counters,
+                                              FixedDirect* fixed, IrradianceParts* deferred,
+                                              float mc_rate, UnoccludedSingle* unoccluded) const {
+    if (!texel_reads_field_)
+        return estimate(t.position, t.normal, t.albedo, rng, counters, fixed, deferred, mc_rate,
+                        unoccluded);
+    // The texel as a deeper vertex landing on it: the field at itself. Its fixed lights'
+    // shadows (FixedDirect::shadows, known from the first path) decide whether it holds.
+    FieldRead read;
+    const IrradianceParts parts =
+        field_corrected_path(corrections_->at_texel(map, texel), t.position, t.normal, t.albedo, 0,
+                             rng, counters, fixed, nullptr, read);
+    if (TexelPathRecord* record = PathRecording::current()) {
+        record->texel_field.read = true;
+        record->texel_field.holds = read.holds;
+        record->texel_field.drew_corrections = read.drew_corrections;
+        record->texel_field.added = read.added;
+    }
+    if (!all_finite(parts.total())) {
+        ++counters.guarded;
+        return {};
+    }
+    return parts;
+}
+
+void BakeEstimator::set_vertex_corrections(const VertexCorrectionField* field) {
+    corrections_ = field;
+    // The field holds the walk's surface light only with texel_surface_light = walk; the
+    // prepass's own estimator runs the texels' terms itself.
+    texel_reads_field_ = field && !field->empty() && scatters_ &&
+                         settings_.texel_terms == TexelTerms::Field &&
+                         settings_.texel_surface_light == TexelSurfaceLight::Walk &&
+                         settings_.lit_medium_depth >= 0 && prepass_surface_depth_ < 0;
 }
 
 bool BakeEstimator::direct_light(const EmitterSample& s, const vec3& p, const vec3& n,
@@ -257,7 +294,8 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
     std::vector<OccludedConnection>& occluded = occluded_buffers[size_t(depth)];
     // Up to bake.lit_medium_depth (the texel itself by default: deeper vertices' shadows reach
     // it through a diffuse bounce, and cost as much).
-    const bool lit_here = scatters_ && depth <= settings_.lit_medium_depth;
+    const bool lit_here =
+        scatters_ && depth <= settings_.lit_medium_depth && !(depth == 0 && texel_reads_field_);
     occluded.assign(lit_here ? local.size() : 0, OccludedConnection{});
     const bool walk_here = lit_here && texel_walk();
     // Without the tables' multiple scattering where a walk supplies it (here or in the field).
@@ -298,9 +336,11 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
             }
             if (!seen && lit_here) occluded[i] = c;
         } else if (learn) {
-            if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, want, no_multiple) &&
-                lit_here)
-                fixed->occluded.emplace_back(s.light, c);
+            if (!direct_light(s, p, n, albedo_lum, rng, counters, fixed_parts, want,
+                              no_multiple && !keep_multiple)) {
+                fixed->shadows |= shadow_bit(s.light);
+                if (lit_here) fixed->occluded.emplace_back(s.light, c);
+            }
         }
     }
     if (fixed) {
@@ -309,6 +349,7 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
             fixed->parts = fixed_parts;
         }
         parts += fixed->parts;
+        if (unoccluded) unoccluded->shadows |= fixed->shadows;
         for (const auto& [light, c] : fixed->occluded)
             for (size_t i = 0; i < local.size(); ++i)
                 if (local[i].light == light && local[i].fixed) occluded[i] = c;
@@ -416,10 +457,13 @@ IrradianceParts BakeEstimator::surface_path(const vec3& p, const vec3& n, const 
         }
         // The prepass files surface light under `surface`, where nothing else of the texel's
         // own Monte Carlo terms lands (no indirect segment runs there): the field keeps it apart.
-        if (prepass)
+        if (prepass) {
             mc.surface += surface_light.total();
-        else
+            if (unoccluded)
+                unoccluded->surface_light_multiple += surface_light.multiple * mc_weight;
+        } else {
             mc += surface_light;
+        }
     }
     if (depth < settings_.bounces && !(prepass && depth == 0))
         indirect_segment(p, n, albedo_lum, depth, rng, counters, parts,
@@ -511,12 +555,12 @@ void BakeEstimator::indirect_segment(const vec3& p, const vec3& n, float albedo_
     }
 }
 
-IrradianceParts BakeEstimator::vertex_irradiance(const SurfaceHit& hit, const vec3& albedo,
-                                                 int depth, CounterRng& rng, BakeCounters& counters,
-                                                 IrradianceParts* deferred) const {
-    VertexCorrectionField::Texel field;
-    if (corrections_ && scatters_ && depth > settings_.lit_medium_depth)
-        field = corrections_->locate(hit, &counters.rays);
+IrradianceParts BakeEstimator::field_corrected_path(const VertexCorrectionField::Texel& field,
+                                                    const vec3& p, const vec3& n,
+                                                    const vec3& albedo, int depth, CounterRng& rng,
+                                                    BakeCounters& counters, FixedDirect* fixed,
+                                                    IrradianceParts* deferred,
+                                                    FieldRead& read) const {
     UnoccludedSingle single;
     // A field texel whose prepass met no unoccluded connection (a pocket under a house's floor,
     // a wall's cavity) has no ratio: the tables' infinite medium, lit along a sky sample or
@@ -525,28 +569,48 @@ IrradianceParts BakeEstimator::vertex_irradiance(const SurfaceHit& hit, const ve
     // ~4x; drawn at the vertex (0.8 M corrections, 1 % of the rays), 1.13x.
     single.draw_corrections =
         field.found() && settings_.single_correction && !field.single_ratio_known();
-    IrradianceParts parts =
-        surface_path(hit.position, hit.shading_normal, albedo, depth, rng, counters, nullptr,
-                     deferred, field.found(), -1.0f, field.found() ? &single : nullptr);
+    read.drew_corrections = single.draw_corrections;
+    IrradianceParts parts = surface_path(p, n, albedo, depth, rng, counters, fixed, deferred,
+                                         field.found(), -1.0f, field.found() ? &single : nullptr);
     // Read after the vertex's own path, which hides the read's cache miss. The corrections of
     // the unoccluded connections scale with the vertex's own tables' value of them. A vertex
     // shadowed otherwise than the texel (a pocket of a layered wall whose texel's centre sees
     // a lamp) keeps its tables' multiple scattering instead.
     if (field.found()) {
-        const bool holds = field.holds_for(single.shadows);
-        const vec3 added =
-            holds ? field.value(depth < settings_.bounces) + field.single_ratio() * single.tables
-                  : vec3(0.0f);
-        if (holds)
-            parts.single += added;
-        else
+        read.holds = field.holds_for(single.shadows);
+        const bool with_surface_light = depth < settings_.bounces;
+        read.added = read.holds
+                         ? field.value(with_surface_light) + field.single_ratio() * single.tables
+                         : vec3(0.0f);
+        if (read.holds) {
+            // In-scattered light: its multiple part where the field reports it (a texel's
+            // read, at_texel), else all of it as single (a deeper vertex's: only the total
+            // reaches the texel).
+            const vec3 multiple = field.multiple(with_surface_light);
+            parts.single += read.added - multiple;
+            parts.multiple += multiple;
+        } else {
             parts.multiple += single.left_multiple;
-        TexelPathRecord* record = depth == 1 ? PathRecording::current() : nullptr;
-        if (record && record->in_bounce) {
-            record->bounce.field_read = holds;
-            record->bounce.drew_corrections = single.draw_corrections;
-            record->bounce.field = added;
         }
+    }
+    return parts;
+}
+
+IrradianceParts BakeEstimator::vertex_irradiance(const SurfaceHit& hit, const vec3& albedo,
+                                                 int depth, CounterRng& rng, BakeCounters& counters,
+                                                 IrradianceParts* deferred) const {
+    VertexCorrectionField::Texel field;
+    if (corrections_ && scatters_ && depth > settings_.lit_medium_depth)
+        field = corrections_->locate(hit, &counters.rays);
+    FieldRead read;
+    const IrradianceParts parts =
+        field_corrected_path(field, hit.position, hit.shading_normal, albedo, depth, rng, counters,
+                             nullptr, deferred, read);
+    TexelPathRecord* record = depth == 1 ? PathRecording::current() : nullptr;
+    if (field.found() && record && record->in_bounce) {
+        record->bounce.field_read = read.holds;
+        record->bounce.drew_corrections = read.drew_corrections;
+        record->bounce.field = read.added;
     }
     return parts;
 }

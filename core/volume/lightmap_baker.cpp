@@ -23,6 +23,7 @@ nlohmann::json BakeStats::to_json() const {
             {"vertex_correction_paths", correction_paths},
             {"vertex_correction_texels", correction_texels},
             {"vertex_correction_straddling_texels", correction_straddling},
+            {"texel_terms", texel_terms},
             {"rays", rays},
             {"impulse_queries", impulse_queries},
             {"impulse_mixture_tables", mixture_tables},
@@ -151,6 +152,9 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
         stats_.correction_straddling = corrections_->straddling_texels();
         stats_.rays += corrections_->rays();
     }
+    stats_.texel_terms = method_ != BakeMethod::Impulse   ? ""
+                         : estimator_.texel_reads_field() ? "field"
+                                                          : "own";
     // One loop over every map's rows (a loop per map waited at each of valley's 50 maps for
     // its last rows, on every pass); the split into shares numbers the rows the same way.
     std::vector<long> map_row0(maps_.size() + 1, 0);  // global number of each map's row 0
@@ -184,9 +188,9 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
             for (int s = first; s < first + samples; ++s) {
                 CounterRng rng = texel_random(settings_.seed, mi, i, s);
                 UnoccludedSingle single;
-                add_texel_path(estimator_.estimate(t.position, t.normal, t.albedo, rng, counters,
-                                                   &fixed_[mi][i], &deferred_sums_[mi][i], rates[i],
-                                                   files ? &single : nullptr),
+                add_texel_path(estimator_.estimate_texel(t, mi, i, rng, counters, &fixed_[mi][i],
+                                                         &deferred_sums_[mi][i], rates[i],
+                                                         files ? &single : nullptr),
                                sums_[mi][i], light_squares_[mi][i]);
                 if (files) single_sums_[mi][i] += single;
             }
@@ -390,8 +394,8 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
                 const IrradianceParts before = deferred[j];
                 UnoccludedSingle unoccluded;  // added sample by sample, as the bake does
                 path.path =
-                    estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed,
-                                       &deferred[j], rates[j], files ? &unoccluded : nullptr);
+                    estimator.estimate_texel(t, lightmap, j, rng, counters, &fixed, &deferred[j],
+                                             rates[j], files ? &unoccluded : nullptr);
                 add_texel_path(path.path, sums[j], light_squares);
                 if (files) single[j] += unoccluded;
                 if (!record) continue;

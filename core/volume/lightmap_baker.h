@@ -31,6 +31,9 @@ struct BakeStats {
     int correction_paths = 0;        // its paths per texel (0: no field)
     long correction_texels = 0;      // texels whose prepass ran
     long correction_straddling = 0;  // field texels crossed by geometry (lookups test them)
+    // Impulse: where the texels' Monte Carlo terms came from (bake.texel_terms as it ran:
+    // "own", or "field" where the field was built and may lend them); "" other methods.
+    std::string texel_terms;
     long rays = 0, impulse_queries = 0, guarded = 0;
     // Impulse: node tables built for segments through several media (this process's,
     // ImpulseIrradianceCache::blend; not summed across a cluster's ranks).

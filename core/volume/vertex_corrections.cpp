@@ -15,6 +15,11 @@
 namespace freqlab {
 
 namespace {
+// Three half floats from `h` on.
+vec3 unpack_rgb(const uint16_t* h) {
+    return vec3(glm::unpackHalf1x16(h[0]), glm::unpackHalf1x16(h[1]), glm::unpackHalf1x16(h[2]));
+}
+
 // The prepass runs every kFieldStride-th texel in x and y (the others take their mean), with
 // kFieldPathFraction of the Monte Carlo samples a texel gets in the bake (texel_mc_rate x
 // spp): an eighth of the texels' own Monte Carlo work. Measured on cornell_fog at 1024 spp
@@ -274,7 +279,7 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
 }
 
 long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& m, int paths,
-                                     PackedMap& packed) {
+                                     bool corrections_drawn, PackedMap& packed) {
     const size_t n = map.texels.size(), rows = m.texel.size();
     // Per valid texel: the emitters' RGB, the surface light's RGB, the corrections' ratio to
     // the tables' single scattering of the unoccluded connections. Only valid texels are read:
@@ -284,6 +289,7 @@ long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& 
     // values there, 10 % of the bake's lm_irradiance relMSE.)
     constexpr size_t kChannels = 9;
     std::vector<float> v(rows * kChannels, 0.0f);
+    std::vector<float> multiple(rows * kMultipleHalves, 0.0f);
     std::vector<char> readable(rows, 0);
     for (size_t r = 0; r < rows; ++r) {
         vec3 emitters = (m.deferred[r].single + m.deferred[r].multiple) / float(paths);
@@ -294,9 +300,13 @@ long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& 
         // ratio of real parts to tables read 5.8e4 on smoke_room's floor where the prepass's
         // connections grazed the smoke (tables ~0) and its real parts did not: every bounce
         // landing there brought ~2000.
+        // Without bake.single_correction the prepass draws no real parts: no ratio (one of 0
+        // real parts over the tables, -1, took the tables' single scattering from every vertex
+        // reading the field: haze_occluder's lit floor read 0.37 of VPT's in-scattered light
+        // when the texels read it too).
         const UnoccludedSingle& u = m.unoccluded[r];
         vec3 ratio(0.0f);
-        for (int c = 0; c < 3; ++c) {
+        for (int c = 0; c < 3 && corrections_drawn; ++c) {
             if (!(u.tables[c] > 0.0f)) continue;
             const ExplainedSingle x = explained_single(u.real[c], u.tables[c], u.paths);
             ratio[c] = x.scale - 1.0f;
@@ -305,11 +315,18 @@ long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& 
         if (!std::isfinite(emitters.x + emitters.y + emitters.z + surface.x + surface.y +
                            surface.z + ratio.x + ratio.y + ratio.z))
             continue;
+        // Sums over the texels the filter averaged, as the ratio's (u.paths paths).
+        const vec3 emitters_multiple = m.deferred[r].multiple / float(paths);
+        const vec3 surface_multiple =
+            u.paths > 0.0f ? u.surface_light_multiple / u.paths : vec3(0.0f);
+        if (!all_finite(emitters_multiple + surface_multiple)) continue;
         readable[r] = 1;
         for (int c = 0; c < 3; ++c) {
             v[r * kChannels + size_t(c)] = emitters[c];
             v[r * kChannels + 3 + size_t(c)] = surface[c];
             v[r * kChannels + 6 + size_t(c)] = ratio[c];
+            multiple[r * kMultipleHalves + size_t(c)] = emitters_multiple[c];
+            multiple[r * kMultipleHalves + 3 + size_t(c)] = surface_multiple[c];
         }
     }
     packed.width = map.width;
@@ -324,6 +341,8 @@ long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& 
     const float inv_ratio = packed.ratio_scale > 0.0f ? 1.0f / packed.ratio_scale : 0.0f;
     packed.halves.clear();
     packed.halves.reserve(rows * kHalvesPerTexel);
+    packed.multiple_halves.clear();
+    packed.multiple_halves.reserve(rows * kMultipleHalves);
     packed.straddles.assign((n + 63) / 64, {});
     long straddling = 0;
     for (size_t r = 0; r < rows; ++r) {
@@ -342,6 +361,9 @@ long VertexCorrectionField::pack_map(const ObjectLightmap& map, const MapTerms& 
             h[9 + w16] = m.gated[r] ? uint16_t(m.guide.shadows[i] >> (16 * w16)) : 0;
         h[13] = m.gated[r] ? 1 : 0;
         packed.halves.insert(packed.halves.end(), h, h + kHalvesPerTexel);
+        for (size_t c = 0; c < kMultipleHalves; ++c)
+            packed.multiple_halves.push_back(
+                glm::packHalf1x16(multiple[r * kMultipleHalves + c] * inv));
         if (m.straddles[r]) {
             packed.straddles[i / 64].bits |= uint64_t(1) << (i % 64);
             const bool mixed = m.cover_mixed[r];
@@ -400,7 +422,7 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
         // Keyed apart from the bake's lightmaps and probes (maps.size()).
         const MapTerms terms = estimate_map(rays, estimator, map, mi, maps.size() + 1 + mi,
                                             settings.seed, rays_cast, computed);
-        straddling += pack_map(map, terms, paths_, packed_[mi]);
+        straddling += pack_map(map, terms, paths_, settings.single_correction, packed_[mi]);
     });
     rays_ = rays_cast;
     computed_ = computed;
@@ -468,17 +490,26 @@ VertexCorrectionField::Texel VertexCorrectionField::at_texel(size_t map, size_t 
     t.halves_ = kNothing;
     if (map >= packed_.size() || texel >= size_t(packed_[map].width) * packed_[map].height)
         return t;
-    const PackedMap::StraddleWord& word = packed_[map].straddles[texel / 64];
-    return word.readable >> (texel % 64) & 1 ? readable_texel(packed_[map], word, texel) : t;
+    const PackedMap& packed = packed_[map];
+    const PackedMap::StraddleWord& word = packed.straddles[texel / 64];
+    if (!(word.readable >> (texel % 64) & 1)) return t;
+    t = readable_texel(packed, word, texel);
+    t.multiple_halves_ =
+        packed.multiple_halves.data() +
+        PackedMap::rank(word.readable, word.readable_before, texel) * kMultipleHalves;
+    return t;
+}
+
+vec3 VertexCorrectionField::Texel::multiple(bool with_surface_light) const {
+    if (!multiple_halves_) return vec3(0.0f);
+    vec3 v = unpack_rgb(multiple_halves_);
+    if (with_surface_light && surface_light_) v += unpack_rgb(multiple_halves_ + 3);
+    return v * scale_;
 }
 
 vec3 VertexCorrectionField::Texel::value(bool with_surface_light) const {
-    auto rgb = [](const uint16_t* h) {
-        return vec3(glm::unpackHalf1x16(h[0]), glm::unpackHalf1x16(h[1]),
-                    glm::unpackHalf1x16(h[2]));
-    };
-    vec3 v = rgb(halves_);
-    if (with_surface_light && surface_light_) v += rgb(halves_ + 3);
+    vec3 v = unpack_rgb(halves_);
+    if (with_surface_light && surface_light_) v += unpack_rgb(halves_ + 3);
     return v * scale_;
 }
 
@@ -490,9 +521,7 @@ bool VertexCorrectionField::Texel::holds_for(uint64_t shadows) const {
 }
 
 vec3 VertexCorrectionField::Texel::single_ratio() const {
-    return vec3(glm::unpackHalf1x16(halves_[6]), glm::unpackHalf1x16(halves_[7]),
-                glm::unpackHalf1x16(halves_[8])) *
-           ratio_scale_;
+    return unpack_rgb(halves_ + 6) * ratio_scale_;
 }
 
 }  // namespace freqlab

@@ -23,6 +23,12 @@
 // which point and directional lights it sees occluded: a vertex shadowed otherwise (a pocket
 // of a layered IFC wall whose texel's centre sees a lamp: +0.14 where VPT reads 0) does not
 // read it and keeps its tables' multiple scattering.
+// With bake.texel_terms = field the texels themselves read it too (at_texel, not locate: their
+// own texel, no straddle rays), in place of their own Monte Carlo terms; for them the field
+// also keeps the multiple-scattering part of its value apart (kMultipleHalves, read in texel
+// order), so that lm_inscatter_single / multiple split as the texel's own terms would.
+// Without bake.single_correction the prepass draws no real parts and the field lends no ratio
+// (a ratio of 0 real parts to the tables, -1, took every reader's single scattering away).
 // A vertex deeper than bake.lit_medium_depth that lands on a lightmapped surface adds the
 // field's value at the nearest texel to its irradiance: the emitters' part, and the surface
 // light's where the vertex continues the path (its indirect segment then carries only
@@ -103,6 +109,9 @@ class VertexCorrectionField {
         // The correction irradiance, with its surface light's scattering when the vertex
         // continues the path (with_surface_light).
         vec3 value(bool with_surface_light) const;
+        // The multiple-scattering part of value(): reported where the texel was found by
+        // at_texel (a texel reading the field at itself), 0 by locate (a deeper vertex).
+        vec3 multiple(bool with_surface_light) const;
         // The real single scattering of the unoccluded connections over the tables' (regularised
         // as pack_map says), minus 1: the vertex adds this times its own tables' value.
         vec3 single_ratio() const;
@@ -117,6 +126,7 @@ class VertexCorrectionField {
       private:
         friend class VertexCorrectionField;
         const uint16_t* halves_ = nullptr;
+        const uint16_t* multiple_halves_ = nullptr;  // kMultipleHalves of them, or none
         float scale_ = 0.0f, ratio_scale_ = 0.0f;
         bool surface_light_ = false, ratio_known_ = true;
     };
@@ -161,10 +171,14 @@ class VertexCorrectionField {
     };
     // Emitters, surface light, ratio (RGB each), the shadows' 64 bits, whether they are known.
     static constexpr size_t kHalvesPerTexel = 14;
+    // The multiple parts of the emitters' terms and of the surface light (RGB each), apart:
+    // only a texel reading itself asks (in texel order), so the hot entry keeps its 28 bytes.
+    static constexpr size_t kMultipleHalves = 6;
     struct PackedMap {
         int width = 0, height = 0;
         float scale = 0.0f, ratio_scale = 0.0f;
-        std::vector<uint16_t> halves;  // readable texels only, in texel order
+        std::vector<uint16_t> halves;           // readable texels only, in texel order
+        std::vector<uint16_t> multiple_halves;  // the same texels, kMultipleHalves each
         // Texels crossed by geometry: a bit each, 64 to a word, beside the number of straddling
         // texels in the words before it (the rank of a texel's entry in `centres`, which are
         // in texel order). One cache line answers both: a binary search over the centres was
@@ -198,7 +212,7 @@ class VertexCorrectionField {
                           std::atomic<long>& rays_cast, std::atomic<long>& computed) const;
     static Geometry trace_geometry(const RayScene& rays, const std::vector<ObjectLightmap>& maps);
     static long pack_map(const ObjectLightmap& map, const MapTerms& terms, int paths,
-                         PackedMap& packed);
+                         bool corrections_drawn, PackedMap& packed);
     int paths_ = 0;
     long rays_ = 0;
     long computed_ = 0;
