@@ -62,7 +62,9 @@ shot bake_valley_split_vpt.png scenes/valley.json --method impulse --set bake.qu
      --set bake.texel_density=1 --set frame.width=640 --set frame.height=400 --compare
 # Where impulse's Monte Carlo terms rest on few texels: the texel filter's window (texel_mc_window)
 # over the same preview (walls and the ground under houses: small; open ground: the whole 7 x 7).
+# With the texels' own terms: the preset's texels read the vertex correction field instead.
 shot bake_valley_mc_window.png scenes/valley.json --method impulse --set bake.quality=low \
+     --set bake.texel_terms=own \
      --set bake.texel_density=1 --set frame.width=640 --set frame.height=400 \
      --overlay texel_mc_window --inspect 560,330
 # Its time-error plot: bench --study bake at 1 texel/unit (the plot is the study's own PNG).

@@ -507,18 +507,22 @@ TEST(Bake, TexelEstimateIsWhatTheBakeStoredOnEveryLightmap) {
     EXPECT_GT(differs_as_lightmap0, checked / 2);
 }
 
-// bake.texel_terms = field: a texel reads the vertex correction field at itself instead of
-// running its own Monte Carlo terms. texel_estimate (--debug-texel) re-runs it through the same
-// BakeEstimator::estimate_texel: what the bake stored, each path recording what it read.
-TEST(Bake, TexelsReadingTheFieldAreWhatTheBakeStoredAndTheirPathsSaySo) {
-    Fixture f(R"({"frames": 1, "camera": {"position": [0, -5, 3], "look_at": [0, 0, 0]},
+// A floor, a box on it and a point light, in fog: the texel-estimate tests' scene.
+constexpr const char* kFloorAndBoxByALampInFog =
+    R"({"frames": 1, "camera": {"position": [0, -5, 3], "look_at": [0, 0, 0]},
       "materials": {"m": {"type": "lambert", "albedo": 0.7}},
       "objects": [{"shape": {"type": "plane", "size": [4, 4]}, "material": "m"},
                   {"shape": {"type": "box", "size": [1, 1, 1]}, "material": "m",
                    "transform": {"translate": [0.8, 0, 0.5]}}],
       "lights": [{"type": "point", "position": [-0.5, -0.5, 2.0], "intensity": 8}],
       "media": [{"sigma_s": 0.4, "sigma_a": 0.05, "g": 0.3,
-                 "bounds": {"box": {"min": [-2, -2, 0], "max": [2, 2, 2.5]}}}]})");
+                 "bounds": {"box": {"min": [-2, -2, 0], "max": [2, 2, 2.5]}}}]})";
+
+// bake.texel_terms = field: a texel reads the vertex correction field at itself instead of
+// running its own Monte Carlo terms. texel_estimate (--debug-texel) re-runs it through the same
+// BakeEstimator::estimate_texel: what the bake stored, each path recording what it read.
+TEST(Bake, TexelsReadingTheFieldAreWhatTheBakeStoredAndTheirPathsSaySo) {
+    Fixture f(kFloorAndBoxByALampInFog);
     const ImpulseTables& tables = test_support::shared_impulse_tables();
     BakeSettings s;
     s.spp = 8;
@@ -562,14 +566,7 @@ TEST(Bake, TexelsReadingTheFieldAreWhatTheBakeStoredAndTheirPathsSaySo) {
 // (volume/texel_filter.h): texel_estimate, what --debug-texel prints, re-runs the window and
 // filters it the same way, so it is still what the bake stored; unfiltered it is not.
 TEST(Bake, ImpulseTexelEstimateIsTheFilteredBakedTexel) {
-    Fixture f(R"({"frames": 1, "camera": {"position": [0, -5, 3], "look_at": [0, 0, 0]},
-      "materials": {"m": {"type": "lambert", "albedo": 0.7}},
-      "objects": [{"shape": {"type": "plane", "size": [4, 4]}, "material": "m"},
-                  {"shape": {"type": "box", "size": [1, 1, 1]}, "material": "m",
-                   "transform": {"translate": [0.8, 0, 0.5]}}],
-      "lights": [{"type": "point", "position": [-0.5, -0.5, 2.0], "intensity": 8}],
-      "media": [{"sigma_s": 0.4, "sigma_a": 0.05, "g": 0.3,
-                 "bounds": {"box": {"min": [-2, -2, 0], "max": [2, 2, 2.5]}}}]})");
+    Fixture f(kFloorAndBoxByALampInFog);
     const ImpulseTables& tables = test_support::shared_impulse_tables();
     BakeSettings s;
     s.spp = 8;

@@ -6,11 +6,15 @@
 //   BENCH_BAKE_SCENE=scenes/smoke_room.json ./build/tests/freqlab_benchmarks
 //   --benchmark_filter=BakePath
 //   BENCH_BAKE_SET="texel_mc_rate=0 single_correction=false" (bake settings by key, as --set)
+//   BENCH_BAKE_SET="texel_terms=field": the vertex correction field is built once (its
+//   prepass is not timed: BakeFieldPrepass times it) and the texels read it (estimate_texel).
+//   Without it impulse's deeper vertices use the tables alone, as before the field.
 // These machines are noisy (the same binary's medians move 10-25 % within minutes): compare
 // methods within one run, randomly interleaved, and read the medians' ns_per_path:
 //   --benchmark_repetitions=12 --benchmark_enable_random_interleaving=true
 //   --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
 
 #include <cstdlib>
 #include <map>
@@ -34,15 +38,21 @@ struct BakeFixture {
     RayScene rays{scene, device};
     Media media{scene.media, scene.source};
     ImpulseTables tables = ImpulseTables::cached(30);  // the CLI's table bounces
-    std::vector<LightmapTexel> texels;
+    std::vector<ObjectLightmap> maps;
+    struct Texel {
+        size_t map, index;  // in maps
+    };
+    std::vector<Texel> texels;  // the valid ones
 
     BakeFixture() {
         rays.update(0.0f);
         const LightmapBaker atlas(rays, media, nullptr, BakeMethod::Surface, BakeSettings{});
-        for (const ObjectLightmap& m : atlas.lightmaps())
-            for (const LightmapTexel& t : m.texels)
-                if (t.state == TexelState::Valid) texels.push_back(t);
+        maps = atlas.lightmaps();
+        for (size_t m = 0; m < maps.size(); ++m)
+            for (size_t i = 0; i < maps[m].texels.size(); ++i)
+                if (maps[m].texels[i].state == TexelState::Valid) texels.push_back({m, i});
     }
+    const LightmapTexel& texel(const Texel& t) const { return maps[t.map].texels[t.index]; }
 };
 
 // The estimator's settings: BakeSettings{} with BENCH_BAKE_SET's "key=value" words applied,
@@ -68,7 +78,15 @@ BakeFixture& fixture() {
 void BM_BakePath(benchmark::State& state) {
     BakeFixture& f = fixture();
     const BakeMethod method = BakeMethod(state.range(0));
-    const BakeEstimator estimator(f.rays, f.media, &f.tables, method, bench_settings());
+    const BakeSettings settings = bench_settings();
+    BakeEstimator estimator(f.rays, f.media, &f.tables, method, settings);
+    std::unique_ptr<VertexCorrectionField> field;
+    if (settings.texel_terms == TexelTerms::Field &&
+        uses_vertex_corrections(method, settings, &f.tables, f.media)) {
+        field =
+            std::make_unique<VertexCorrectionField>(f.rays, f.media, &f.tables, settings, f.maps);
+        estimator.set_vertex_corrections(field.get());
+    }
     BakeCounters counters;
     // As the baker: each texel's fixed direct light is computed on its first path only.
     std::vector<BakeEstimator::FixedDirect> fixed(f.texels.size());
@@ -76,15 +94,17 @@ void BM_BakePath(benchmark::State& state) {
     for (auto _ : state) {
         vec3 sum(0.0f);
         for (size_t i = 0; i < f.texels.size(); ++i) {
-            const LightmapTexel& t = f.texels[i];
             CounterRng rng(0, 0, i, sample);
-            sum += estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed[i])
+            sum += estimator
+                       .estimate_texel(f.texel(f.texels[i]), f.texels[i].map, f.texels[i].index,
+                                       rng, counters, &fixed[i], nullptr, -1.0f, nullptr)
                        .total();
         }
         ++sample;
         benchmark::DoNotOptimize(sum);
     }
-    state.SetLabel(to_string(method));
+    state.SetLabel(std::string(to_string(method)) +
+                   (estimator.texel_reads_field() ? " (texels read the field)" : ""));
     state.counters["ns_per_path"] =
         benchmark::Counter(double(f.texels.size()), benchmark::Counter::kIsIterationInvariantRate |
                                                         benchmark::Counter::kInvert);
@@ -101,6 +121,35 @@ BENCHMARK(BM_BakePath)
     ->Arg(int(BakeMethod::Extinction))
     ->Arg(int(BakeMethod::Impulse))
     ->Unit(benchmark::kMillisecond);
+
+namespace {
+
+// The vertex correction field's prepass over the scene's lightmaps (once per bake, before its
+// first path), one thread: with texel_terms = field it is what the texels' Monte Carlo terms
+// cost, shared by the bake's spp paths a texel. ns_per_texel is per valid texel.
+void BM_BakeFieldPrepass(benchmark::State& state) {
+    BakeFixture& f = fixture();
+    const BakeSettings settings = bench_settings();
+    // One thread, as BakePath's loop (the prepass's own loops are parallel).
+    const tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+    long computed = 0;
+    int paths = 0;
+    for (auto _ : state) {
+        const VertexCorrectionField field(f.rays, f.media, &f.tables, settings, f.maps);
+        computed = field.computed_texels();
+        paths = field.paths_per_texel();
+        benchmark::DoNotOptimize(computed);
+    }
+    state.counters["ns_per_texel"] =
+        benchmark::Counter(double(f.texels.size()), benchmark::Counter::kIsIterationInvariantRate |
+                                                        benchmark::Counter::kInvert);
+    state.counters["computed_texels"] = double(computed);
+    state.counters["paths_per_computed_texel"] = double(paths);
+}
+
+}  // namespace
+
+BENCHMARK(BM_BakeFieldPrepass)->Unit(benchmark::kMillisecond);
 
 namespace {
 
