@@ -507,6 +507,8 @@ TEST(Bake, TexelEstimateIsWhatTheBakeStoredOnEveryLightmap) {
     EXPECT_GT(differs_as_lightmap0, checked / 2);
 }
 
+namespace {
+
 // A floor, a box on it and a point light, in fog: the texel-estimate tests' scene.
 constexpr const char* kFloorAndBoxByALampInFog =
     R"({"frames": 1, "camera": {"position": [0, -5, 3], "look_at": [0, 0, 0]},
@@ -518,18 +520,26 @@ constexpr const char* kFloorAndBoxByALampInFog =
       "media": [{"sigma_s": 0.4, "sigma_a": 0.05, "g": 0.3,
                  "bounds": {"box": {"min": [-2, -2, 0], "max": [2, 2, 2.5]}}}]})";
 
+// Their bake: 8 paths a texel, one bounce, 4 texels/unit, no probes.
+BakeSettings small_texel_bake() {
+    BakeSettings s;
+    s.spp = 8;
+    s.bounces = 1;
+    s.texel_density = 4.0f;
+    s.probes_x = 0;
+    return s;
+}
+
+}  // namespace
+
 // bake.texel_terms = field: a texel reads the vertex correction field at itself instead of
 // running its own Monte Carlo terms. texel_estimate (--debug-texel) re-runs it through the same
 // BakeEstimator::estimate_texel: what the bake stored, each path recording what it read.
 TEST(Bake, TexelsReadingTheFieldAreWhatTheBakeStoredAndTheirPathsSaySo) {
     Fixture f(kFloorAndBoxByALampInFog);
     const ImpulseTables& tables = test_support::shared_impulse_tables();
-    BakeSettings s;
-    s.spp = 8;
-    s.bounces = 1;
-    s.texel_density = 4.0f;
+    BakeSettings s = small_texel_bake();
     s.texel_terms = TexelTerms::Field;
-    s.probes_x = 0;
     LightmapBaker baker(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
     baker.run();
     EXPECT_EQ(baker.stats().texel_terms, "field");
@@ -568,13 +578,9 @@ TEST(Bake, TexelsReadingTheFieldAreWhatTheBakeStoredAndTheirPathsSaySo) {
 TEST(Bake, ImpulseTexelEstimateIsTheFilteredBakedTexel) {
     Fixture f(kFloorAndBoxByALampInFog);
     const ImpulseTables& tables = test_support::shared_impulse_tables();
-    BakeSettings s;
-    s.spp = 8;
-    s.bounces = 1;
-    s.texel_density = 4.0f;
+    BakeSettings s = small_texel_bake();
     s.texel_mc_rate = 0.25f;
     s.texel_mc_radius = 2;
-    s.probes_x = 0;
     LightmapBaker baker(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
     baker.run();
     const ObjectLightmap& floor = baker.lightmaps()[0];

@@ -57,7 +57,8 @@
 // |---------------------|------------------------------------------------------------------|
 // | vertex_corrections  | bake.vertex_corrections: 1 builds and reads the field (impulse)   |
 // | kFieldStride        | 2: the prepass runs every second texel in x and y                |
-// | kFieldPathFraction  | 0.5: ceil(spp x texel_mc_rate x 0.5) paths (1024 spp: 11)        |
+// | kFieldPathFraction  | 0.5: ceil(spp x texel_mc_rate x 0.5) paths (1024 spp: 11); 2.5   |
+// |                     | when the texels read it too (texel_terms = field: 64 spp, 4)     |
 // | straddle rays       | 4 a texel, 0.71 / density long: geometry crossing the footprint   |
 // | surface light depth | 2: the surface a depth-1 vertex's walk reaches (deeper vertices   |
 // |                     | read light of up to depth - 1 more bounces than bake.bounces)    |
