@@ -232,11 +232,8 @@ IrradianceParts BakeEstimator::estimate_texel(const LightmapTexel& t, size_t map
 
 void BakeEstimator::set_vertex_corrections(const VertexCorrectionField* field) {
     corrections_ = field;
-    // The field holds the walk's surface light only with texel_surface_light = walk; the
-    // prepass's own estimator runs the texels' terms itself.
-    texel_reads_field_ = field && !field->empty() && scatters_ &&
-                         settings_.texel_terms == TexelTerms::Field &&
-                         settings_.texel_surface_light == TexelSurfaceLight::Walk &&
+    // The prepass's own estimator runs the texels' terms itself.
+    texel_reads_field_ = field && !field->empty() && scatters_ && texels_read_field(settings_) &&
                          settings_.lit_medium_depth >= 0 && prepass_surface_depth_ < 0;
 }
 

@@ -149,6 +149,11 @@ bool uses_vertex_corrections(BakeMethod method, const BakeSettings& settings,
            settings.lit_medium_depth >= 0 && tables && !media.empty();
 }
 
+bool texels_read_field(const BakeSettings& settings) {
+    return settings.texel_terms == TexelTerms::Field &&
+           settings.texel_surface_light == TexelSurfaceLight::Walk;
+}
+
 // One map's prepass: the computed texels' Monte Carlo terms, filtered, and the others' from
 // their sources, with what the packing needs of the texels' geometry. Per valid texel (a
 // row: valley's atlases are 80 % gutters and empty texels; per texel these arrays and the
@@ -407,11 +412,11 @@ VertexCorrectionField::VertexCorrectionField(const RayScene& rays, const Media& 
     estimator.set_field_prepass(kSurfaceLightDepth);
     surface_light_ = settings.texel_surface_light == TexelSurfaceLight::Walk &&
                      settings.bounces >= kSurfaceLightDepth;
-    paths_ = std::max(1, int(std::ceil(double(settings.spp) * settings.texel_mc_rate *
-                                           (settings.texel_terms == TexelTerms::Field
-                                                ? kFieldPathFractionForTexels
-                                                : kFieldPathFraction) -
-                                       1e-9)));
+    paths_ =
+        std::max(1, int(std::ceil(double(settings.spp) * settings.texel_mc_rate *
+                                      (texels_read_field(settings) ? kFieldPathFractionForTexels
+                                                                   : kFieldPathFraction) -
+                                  1e-9)));
     map_of_object_.assign(rays.scene().objects.size(), -1);
     lookup_ = LightmapLookup(maps, rays.scene().objects.size());
     packed_.resize(maps.size());

@@ -82,6 +82,10 @@ enum class BakeMethod;
 // Whether a bake of `method` with these settings builds and reads the field.
 bool uses_vertex_corrections(BakeMethod method, const BakeSettings& settings,
                              const ImpulseTables* tables, const Media& media);
+// Whether the texels of such a bake read the field at themselves (bake.texel_terms = field; the
+// field holds the walk's surface light only with texel_surface_light = walk): the field then
+// runs the texels' Monte Carlo budget, and BakeEstimator::estimate_texel reads it.
+bool texels_read_field(const BakeSettings& settings);
 
 class VertexCorrectionField {
   public:
