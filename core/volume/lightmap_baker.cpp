@@ -47,10 +47,12 @@ double peak_rss_megabytes() {
 }
 
 // Whether a texel's single-scattering corrections are filed apart and filtered as a ratio
-// (texel_filter.h, SingleCorrectionSums): impulse's texel Monte Carlo terms draw them.
-bool files_single_corrections(BakeMethod method, const BakeSettings& settings) {
-    return method == BakeMethod::Impulse && settings.single_correction &&
-           settings.lit_medium_depth >= 0;
+// (texel_filter.h, SingleCorrectionSums): impulse's texel Monte Carlo terms draw them, unless
+// the texels read the vertex correction field in their place.
+bool files_single_corrections(const BakeEstimator& estimator) {
+    const BakeSettings& settings = estimator.settings();
+    return estimator.method() == BakeMethod::Impulse && settings.single_correction &&
+           settings.lit_medium_depth >= 0 && !estimator.texel_reads_field();
 }
 
 }  // namespace
@@ -111,14 +113,12 @@ LightmapBaker::LightmapBaker(const RayScene& scene, const Media& media, const Im
 void LightmapBaker::reset() {
     sums_.assign(maps_.size(), {});
     for (size_t i = 0; i < maps_.size(); ++i) sums_[i].assign(maps_[i].texels.size(), {});
-    deferred_sums_ = sums_;
+    // Sized by the first pass, once it knows whether the texels run terms of their own.
+    deferred_sums_.assign(maps_.size(), {});
+    single_sums_.assign(maps_.size(), {});
     light_squares_.assign(maps_.size(), {});
     for (size_t i = 0; i < maps_.size(); ++i)
         light_squares_[i].assign(maps_[i].texels.size(), 0.0f);
-    single_sums_.assign(maps_.size(), {});
-    if (files_single_corrections(method_, settings_))
-        for (size_t i = 0; i < maps_.size(); ++i)
-            single_sums_[i].assign(maps_[i].texels.size(), {});
     share_shadows_.assign(maps_.size(), {});
     for (size_t i = 0; i < maps_.size(); ++i) share_shadows_[i].assign(maps_[i].texels.size(), 0);
     fixed_.assign(maps_.size(), {});  // media may have changed: computed afresh
@@ -135,6 +135,22 @@ void LightmapBaker::reset() {
     stats_.bake_ms = 0.0;
     stats_.rays = stats_.impulse_queries = stats_.guarded = 0;
     stats_.samples = 0;
+}
+
+void LightmapBaker::size_texel_terms() {
+    // Texels that read the vertex correction field run no Monte Carlo terms of their own:
+    // nothing to sum, filter or raise the rate of (valley low: 84 MB of zeros, and their filter).
+    const bool own = !estimator_.texel_reads_field();
+    const bool files = files_single_corrections(estimator_);
+    for (size_t i = 0; i < maps_.size(); ++i) {
+        deferred_sums_[i].assign(own ? maps_[i].texels.size() : 0, {});
+        single_sums_[i].assign(files ? maps_[i].texels.size() : 0, {});
+    }
+    const int radius = texel_filter_radius(estimator_);
+    if (mc_rates_.size() == maps_.size() && mc_rates_radius_ == radius) return;
+    mc_rates_.clear();
+    for (const ObjectLightmap& map : maps_) mc_rates_.push_back(texel_mc_rates(map, estimator_));
+    mc_rates_radius_ = radius;
 }
 
 void LightmapBaker::run_pass(int samples, Progress* progress) {
@@ -155,13 +171,11 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
     stats_.texel_terms = method_ != BakeMethod::Impulse   ? ""
                          : estimator_.texel_reads_field() ? "field"
                                                           : "own";
+    if (samples_ == 0) size_texel_terms();
     // One loop over every map's rows (a loop per map waited at each of valley's 50 maps for
     // its last rows, on every pass); the split into shares numbers the rows the same way.
     std::vector<long> map_row0(maps_.size() + 1, 0);  // global number of each map's row 0
-    for (size_t mi = 0; mi < maps_.size(); ++mi) {
-        map_row0[mi + 1] = map_row0[mi] + maps_[mi].height;
-        if (mc_rates_.size() <= mi) mc_rates_.push_back(texel_mc_rates(maps_[mi], estimator_));
-    }
+    for (size_t mi = 0; mi < maps_.size(); ++mi) map_row0[mi + 1] = map_row0[mi] + maps_[mi].height;
     const long rows = map_row0.back();
     if (progress) progress->begin_stage("bake " + std::string(to_string(method_)), rows);
     std::atomic<long> rays{0}, queries{0}, guarded{0};
@@ -185,13 +199,15 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
             // Summed sample by sample into the running total: the same additions in the
             // same order whatever the split into passes.
             const bool files = !single_sums_[mi].empty();
+            IrradianceParts* deferred =
+                deferred_sums_[mi].empty() ? nullptr : &deferred_sums_[mi][i];
             for (int s = first; s < first + samples; ++s) {
                 CounterRng rng = texel_random(settings_.seed, mi, i, s);
                 UnoccludedSingle single;
-                add_texel_path(estimator_.estimate_texel(t, mi, i, rng, counters, &fixed_[mi][i],
-                                                         &deferred_sums_[mi][i], rates[i],
-                                                         files ? &single : nullptr),
-                               sums_[mi][i], light_squares_[mi][i]);
+                add_texel_path(
+                    estimator_.estimate_texel(t, mi, i, rng, counters, &fixed_[mi][i], deferred,
+                                              rates[i], files ? &single : nullptr),
+                    sums_[mi][i], light_squares_[mi][i]);
                 if (files) single_sums_[mi][i] += single;
             }
         }
@@ -284,7 +300,8 @@ std::string LightmapBaker::encode_share() const {
         share_index_,
         [&](size_t mi, size_t at, size_t n) {
             w.put_bytes(&sums_[mi][at], n * sizeof(IrradianceParts));
-            w.put_bytes(&deferred_sums_[mi][at], n * sizeof(IrradianceParts));
+            if (!deferred_sums_[mi].empty())
+                w.put_bytes(&deferred_sums_[mi][at], n * sizeof(IrradianceParts));
             w.put_bytes(&light_squares_[mi][at], n * sizeof(float));
             if (!single_sums_[mi].empty())
                 w.put_bytes(&single_sums_[mi][at], n * sizeof(SingleCorrectionSums));
@@ -309,7 +326,8 @@ void LightmapBaker::add_share(const std::string& bytes, int index, const std::st
         index,
         [&](size_t mi, size_t at, size_t n) {
             r.get_bytes(&sums_[mi][at], n * sizeof(IrradianceParts));
-            r.get_bytes(&deferred_sums_[mi][at], n * sizeof(IrradianceParts));
+            if (!deferred_sums_[mi].empty())
+                r.get_bytes(&deferred_sums_[mi][at], n * sizeof(IrradianceParts));
             r.get_bytes(&light_squares_[mi][at], n * sizeof(float));
             if (!single_sums_[mi].empty())
                 r.get_bytes(&single_sums_[mi][at], n * sizeof(SingleCorrectionSums));
@@ -373,7 +391,7 @@ IrradianceParts texel_estimate(const BakeEstimator& estimator,
     const int radius = texel_filter_radius(estimator);
     // The texel and the window the baker's filter reads, re-run with the bake's keys.
     std::vector<IrradianceParts> sums(n), deferred(n);
-    const bool files = files_single_corrections(estimator.method(), estimator.settings());
+    const bool files = files_single_corrections(estimator);
     std::vector<SingleCorrectionSums> single(files ? n : 0);
     TexelFilterGuide guide = TexelFilterGuide::sized(n);
     const int x0 = int(texel % size_t(map.width)), y0 = int(texel / size_t(map.width));
@@ -444,15 +462,18 @@ LayerSet LightmapBaker::layers(size_t mi) const {
         guide.shadows[i] |= share_shadows_[mi][i];
     }
     const int radius = texel_filter_radius(estimator_);
-    std::vector<int> window;
-    const std::vector<IrradianceParts> deferred =
-        filter_texel_sums(map, deferred_sums_[mi], guide, radius,
-                          single_sums_[mi].empty() ? nullptr : &single_sums_[mi], &window);
+    // None before the first pass, nor where the texels read the vertex correction field.
+    std::vector<IrradianceParts> deferred;
+    std::vector<int> window(n, 0);
+    if (!deferred_sums_[mi].empty())
+        deferred =
+            filter_texel_sums(map, deferred_sums_[mi], guide, radius,
+                              single_sums_[mi].empty() ? nullptr : &single_sums_[mi], &window);
     for (size_t i = 0; i < n; ++i) {
         const LightmapTexel& t = map.texels[i];
         if (t.state != TexelState::Valid) continue;
         IrradianceParts p = sums_[mi][i];
-        p += deferred[i];
+        if (!deferred.empty()) p += deferred[i];
         const vec3 e = p.total() * inv;
         const vec3 k = t.albedo * kInvPi * inv;
         const vec3 out[5] = {k * p.total(), e, p.surface * inv, p.single * inv, p.multiple * inv};

@@ -99,7 +99,8 @@ class LightmapBaker {
     // Per lightmap, per texel: surface, single, multiple (RGB each) summed over samples.
     std::vector<std::vector<IrradianceParts>> sums_;
     // The same for the texels' deferred Monte Carlo terms (impulse), filtered over
-    // neighbouring texels when the layers are made (volume/texel_filter.h).
+    // neighbouring texels when the layers are made (volume/texel_filter.h); empty before the
+    // first pass and where the texels read the vertex correction field.
     std::vector<std::vector<IrradianceParts>> deferred_sums_;
     // And their single-scattering corrections, filtered as a ratio (texel_filter.h); empty
     // unless files_single_corrections().
@@ -108,8 +109,12 @@ class LightmapBaker {
     // reads the variance of the texel's light from it: texel_filter.h).
     std::vector<std::vector<float>> light_squares_;
     // Per lightmap, per texel: the rate of its Monte Carlo terms (texel_filter.h), made by the
-    // first pass.
+    // first pass for the filter's radius then (mc_rates_radius_).
     std::vector<std::vector<float>> mc_rates_;
+    int mc_rates_radius_ = -1;
+    // Sizes deferred_sums_ / single_sums_ and makes mc_rates_: the first pass's, once the
+    // estimator knows whether its texels read the vertex correction field.
+    void size_texel_terms();
     // Per lightmap, per texel: its paths' shared direct light (BakeEstimator::FixedDirect).
     std::vector<std::vector<BakeEstimator::FixedDirect>> fixed_;
     std::unique_ptr<VertexCorrectionField> corrections_;

@@ -94,7 +94,10 @@ bool texel_lights_agree(const TexelFilterGuide& guide, size_t i, size_t j) {
 }
 
 int texel_filter_radius(const BakeEstimator& estimator) {
-    return estimator.method() == BakeMethod::Impulse ? estimator.settings().texel_mc_radius : 0;
+    // Texels reading the vertex correction field run no terms of their own to filter.
+    return estimator.method() == BakeMethod::Impulse && !estimator.texel_reads_field()
+               ? estimator.settings().texel_mc_radius
+               : 0;
 }
 
 IrradianceParts mean_of_texels(const std::vector<IrradianceParts>& sums,

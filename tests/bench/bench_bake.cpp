@@ -30,6 +30,8 @@ using namespace freqlab;
 
 namespace {
 
+BakeSettings bench_settings();
+
 struct BakeFixture {
     Scene scene =
         load_scene(std::getenv("BENCH_BAKE_SCENE") ? std::getenv("BENCH_BAKE_SCENE")
@@ -46,7 +48,8 @@ struct BakeFixture {
 
     BakeFixture() {
         rays.update(0.0f);
-        const LightmapBaker atlas(rays, media, nullptr, BakeMethod::Surface, BakeSettings{});
+        // The atlas at BENCH_BAKE_SET's texel density (quality=low: valley's 4 texels/unit).
+        const LightmapBaker atlas(rays, media, nullptr, BakeMethod::Surface, bench_settings());
         maps = atlas.lightmaps();
         for (size_t m = 0; m < maps.size(); ++m)
             for (size_t i = 0; i < maps[m].texels.size(); ++i)
