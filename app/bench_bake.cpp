@@ -183,8 +183,13 @@ int run_bench_bake(const BenchArgs& a) {
     BakeSettings ref_settings = settings;
     ref_settings.seed = settings.seed + 7919;
     LightmapBaker reference(rays, media, nullptr, BakeMethod::Vpt, ref_settings);
-    LightmapBaker impulse(rays, media, &tables, BakeMethod::Impulse, settings);
-    LightmapBaker extinction(rays, media, nullptr, BakeMethod::Extinction, settings);
+    // The curves bake progressively to --max-spp: bakes planned for that many samples (the
+    // vertex correction field's prepass paths follow bake.spp; planned for the preset's 16 it
+    // kept one path, and with texel_terms = field impulse stalled past 16 spp).
+    BakeSettings planned = settings;
+    planned.spp = a.max_spp;
+    LightmapBaker impulse(rays, media, &tables, BakeMethod::Impulse, planned);
+    LightmapBaker extinction(rays, media, nullptr, BakeMethod::Extinction, planned);
     LightmapBaker vpt(rays, media, nullptr, BakeMethod::Vpt, settings);
     std::vector<CurvePoint> c_impulse{{0, 0.0, NAN, NAN}}, c_extinction{{0, 0.0, NAN, NAN}}, c_vpt;
     if (curves) {
@@ -278,6 +283,7 @@ int run_bench_bake(const BenchArgs& a) {
         {"lightmaps", maps},
         {"reference",
          {{"method", "vpt"}, {"spp", a.reference_spp}, {"ms", reference.stats().bake_ms}}},
+        {"curve_bake_spp", a.max_spp},  // bake.spp of the impulse / extinction curves' bakes
         {"impulse", curve_json(c_impulse)},
         {"extinction", curve_json(c_extinction)},
         {"vpt", curve_json(c_vpt)},
@@ -350,9 +356,11 @@ json thickness_row(const BenchArgs& a, BakeStudy& study, const ImpulseTables& ta
     const double tau = thickness_across(media, rays);
     LightmapBaker reference(rays, media, nullptr, BakeMethod::Vpt, ref_settings);
     reference.run_pass(a.reference_spp);
-    LightmapBaker impulse(rays, media, &tables, BakeMethod::Impulse, study.settings);
+    BakeSettings planned = study.settings;  // bakes of --max-spp samples (run_bench_bake)
+    planned.spp = a.max_spp;
+    LightmapBaker impulse(rays, media, &tables, BakeMethod::Impulse, planned);
     impulse.run_pass(a.max_spp);
-    LightmapBaker extinction(rays, media, nullptr, BakeMethod::Extinction, study.settings);
+    LightmapBaker extinction(rays, media, nullptr, BakeMethod::Extinction, planned);
     extinction.run_pass(a.max_spp);
     const double e_impulse = relmse_against(impulse, reference).all;
     const double e_extinction = relmse_against(extinction, reference).all;

@@ -19,7 +19,8 @@ nlohmann::json BakeStats::to_json() const {
              {{"atlas_ms", atlas_ms},
               {"tables_ms", tables_ms},
               {"bake_ms", bake_ms},
-              {"vertex_corrections_ms", corrections_ms}}},
+              {"vertex_corrections_ms", corrections_ms},
+              {"vertex_corrections_geometry_ms", correction_geometry_ms}}},
             {"vertex_correction_paths", correction_paths},
             {"vertex_correction_texels", correction_texels},
             {"vertex_correction_straddling_texels", correction_straddling},
@@ -127,7 +128,7 @@ void LightmapBaker::reset() {
     estimator_.set_vertex_corrections(nullptr);
     if (corrections_) field_geometry_ = corrections_->geometry();
     corrections_.reset();
-    stats_.corrections_ms = 0.0;
+    stats_.corrections_ms = stats_.correction_geometry_ms = 0.0;
     stats_.correction_paths = 0;
     stats_.correction_texels = 0;
     stats_.correction_straddling = 0;
@@ -158,7 +159,13 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
     const auto t0 = Clock::now();
     if (samples_ == 0 && !corrections_ &&
         uses_vertex_corrections(method_, settings_, tables_, media_)) {
-        // Before the first path: deeper vertices read it (volume/vertex_corrections.h).
+        // Before the first path: deeper vertices read it (volume/vertex_corrections.h). Its
+        // geometry once per atlas (a re-bake after a media change keeps it).
+        if (!field_geometry_) {
+            field_geometry_ = std::make_shared<const VertexCorrectionField::Geometry>(
+                VertexCorrectionField::trace_geometry(scene_, maps_));
+            stats_.correction_geometry_ms = ms_since(t0);
+        }
         corrections_ = std::make_unique<VertexCorrectionField>(scene_, media_, tables_, settings_,
                                                                maps_, field_geometry_);
         estimator_.set_vertex_corrections(corrections_.get());

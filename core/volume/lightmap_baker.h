@@ -27,7 +27,9 @@ namespace freqlab {
 
 struct BakeStats {
     double atlas_ms = 0.0, tables_ms = 0.0, bake_ms = 0.0;
-    double corrections_ms = 0.0;     // the vertex correction field's prepass (in bake_ms too)
+    double corrections_ms = 0.0;  // the vertex correction field's prepass (in bake_ms too)
+    // Of which tracing its geometry (straddle and cover rays; 0 where a re-bake kept it).
+    double correction_geometry_ms = 0.0;
     int correction_paths = 0;        // its paths per texel (0: no field)
     long correction_texels = 0;      // texels whose prepass ran
     long correction_straddling = 0;  // field texels crossed by geometry (lookups test them)

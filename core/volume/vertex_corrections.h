@@ -98,6 +98,7 @@ class VertexCorrectionField {
         std::vector<std::vector<TriangleToTexels>> triangles;   // per map, per mesh triangle
         std::vector<std::vector<char>> straddles, cover_mixed;  // per map, per valid texel
     };
+    static Geometry trace_geometry(const RayScene& rays, const std::vector<ObjectLightmap>& maps);
     VertexCorrectionField() = default;
     // Estimates the field over `maps` (kept by reference: the baker's atlases). `geometry`:
     // a field's over the same maps and scene (geometry()), or null to trace it.
@@ -215,7 +216,6 @@ class VertexCorrectionField {
     MapTerms estimate_map(const RayScene& rays, const BakeEstimator& estimator,
                           const ObjectLightmap& map, size_t mi, uint64_t key, int seed,
                           std::atomic<long>& rays_cast, std::atomic<long>& computed) const;
-    static Geometry trace_geometry(const RayScene& rays, const std::vector<ObjectLightmap>& maps);
     static long pack_map(const ObjectLightmap& map, const MapTerms& terms, int paths,
                          bool corrections_drawn, PackedMap& packed);
     int paths_ = 0;

@@ -135,12 +135,13 @@ void BM_BakeFieldPrepass(benchmark::State& state) {
     const BakeSettings settings = bench_settings();
     // One thread, as BakePath's loop (the prepass's own loops are parallel).
     const tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
-    long computed = 0;
+    long computed = 0, rays = 0;
     int paths = 0;
     for (auto _ : state) {
         const VertexCorrectionField field(f.rays, f.media, &f.tables, settings, f.maps);
         computed = field.computed_texels();
         paths = field.paths_per_texel();
+        rays = field.rays();
         benchmark::DoNotOptimize(computed);
     }
     state.counters["ns_per_texel"] =
@@ -148,6 +149,8 @@ void BM_BakeFieldPrepass(benchmark::State& state) {
                                                         benchmark::Counter::kInvert);
     state.counters["computed_texels"] = double(computed);
     state.counters["paths_per_computed_texel"] = double(paths);
+    state.counters["rays_per_computed_texel"] =
+        computed > 0 ? double(rays) / double(computed) : 0.0;
 }
 
 }  // namespace
