@@ -572,6 +572,41 @@ TEST(Bake, TexelsReadingTheFieldAreWhatTheBakeStoredAndTheirPathsSaySo) {
     EXPECT_GE(added, checked / 2);  // the field brought the lit medium and the walk's light
 }
 
+// With texels reading the field, a computed texel whose surface holds few of the prepass's
+// lattice texels within its mean's reach (the box's 4 x 4-texel faces; chart edges) runs up to
+// kFieldMaxBoost (3) times the paths: its mean rests on about as many paths as a texel's amid
+// a wide chart. Without texels reading it (own terms), every computed texel runs the same.
+TEST(Bake, FieldPrepassRaisesThePathsWhereFewTexelsShareAMean) {
+    Fixture f(kFloorAndBoxByALampInFog);
+    const ImpulseTables& tables = test_support::shared_impulse_tables();
+    BakeSettings s = small_texel_bake();
+    s.spp = 64;  // 64 x 0.02 x 2.5: 4 paths a computed texel in field mode, 1 otherwise
+    const std::vector<ObjectLightmap> maps =
+        LightmapBaker(*f.rays, f.media, &tables, BakeMethod::Impulse, s).lightmaps();
+    // Amid the floor's chart a window holds the whole 3 x 3 lattice; a face of the box (4 x 4
+    // texels) at most 2 x 2 of it, and the texel itself.
+    int floor_most = 0, box_most = 0;
+    for (size_t m = 0; m < maps.size(); ++m)
+        for (size_t i = 0; i < maps[m].texels.size(); ++i)
+            (m == 0 ? floor_most : box_most) = std::max(
+                m == 0 ? floor_most : box_most, texel_filter_capacity_on_lattice(maps[m], i, 2, 2));
+    EXPECT_EQ(floor_most, 9);
+    EXPECT_LE(box_most, 5);
+    for (TexelTerms terms : {TexelTerms::Field, TexelTerms::Own}) {
+        s.texel_terms = terms;
+        const VertexCorrectionField field(*f.rays, f.media, &tables, s, maps);
+        const long nominal = field.computed_texels() * field.paths_per_texel();
+        if (terms == TexelTerms::Field) {
+            EXPECT_EQ(field.paths_per_texel(), 4);
+            EXPECT_GT(field.paths_run(), nominal);
+            EXPECT_LE(field.paths_run(), 3 * nominal);
+        } else {
+            EXPECT_EQ(field.paths_per_texel(), 1);
+            EXPECT_EQ(field.paths_run(), nominal);
+        }
+    }
+}
+
 // Impulse defers its Monte Carlo terms and the baker filters them over neighbouring texels
 // (volume/texel_filter.h): texel_estimate, what --debug-texel prints, re-runs the window and
 // filters it the same way, so it is still what the bake stored; unfiltered it is not.

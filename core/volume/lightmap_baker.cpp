@@ -22,6 +22,7 @@ nlohmann::json BakeStats::to_json() const {
               {"vertex_corrections_ms", corrections_ms},
               {"vertex_corrections_geometry_ms", correction_geometry_ms}}},
             {"vertex_correction_paths", correction_paths},
+            {"vertex_correction_paths_run", correction_paths_run},
             {"vertex_correction_texels", correction_texels},
             {"vertex_correction_straddling_texels", correction_straddling},
             {"texel_terms", texel_terms},
@@ -130,6 +131,7 @@ void LightmapBaker::reset() {
     corrections_.reset();
     stats_.corrections_ms = stats_.correction_geometry_ms = 0.0;
     stats_.correction_paths = 0;
+    stats_.correction_paths_run = 0;
     stats_.correction_texels = 0;
     stats_.correction_straddling = 0;
     samples_ = 0;
@@ -171,6 +173,7 @@ void LightmapBaker::run_pass(int samples, Progress* progress) {
         estimator_.set_vertex_corrections(corrections_.get());
         stats_.corrections_ms = ms_since(t0);
         stats_.correction_paths = corrections_->paths_per_texel();
+        stats_.correction_paths_run = corrections_->paths_run();
         stats_.correction_texels = corrections_->computed_texels();
         stats_.correction_straddling = corrections_->straddling_texels();
         stats_.rays += corrections_->rays();

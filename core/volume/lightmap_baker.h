@@ -32,6 +32,7 @@ struct BakeStats {
     double correction_geometry_ms = 0.0;
     int correction_paths = 0;        // its paths per texel (0: no field)
     long correction_texels = 0;      // texels whose prepass ran
+    long correction_paths_run = 0;   // their paths (more where few share their surface)
     long correction_straddling = 0;  // field texels crossed by geometry (lookups test them)
     // Impulse: where the texels' Monte Carlo terms came from (bake.texel_terms as it ran:
     // "own", or "field" where the field was built and may lend them); "" other methods.

@@ -50,6 +50,17 @@ int texel_filter_capacity(const ObjectLightmap& map, size_t i, int radius) {
     return count;
 }
 
+int texel_filter_capacity_on_lattice(const ObjectLightmap& map, size_t i, int radius, int stride) {
+    int count = 0;
+    if (map.texels[i].state != TexelState::Valid) return count;
+    const size_t w = size_t(map.width);
+    for_each_in_window(map, i, radius, [&](size_t j) {
+        const bool lattice = int(j % w) % stride == 0 && int(j / w) % stride == 0;
+        count += (j == i || lattice) && on_surface_of(map, i, j, radius);
+    });
+    return count;
+}
+
 std::vector<float> texel_mc_rates(const ObjectLightmap& map, const BakeEstimator& estimator) {
     const int radius = texel_filter_radius(estimator);
     const float rate = estimator.settings().texel_mc_rate;

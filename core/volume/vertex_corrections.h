@@ -57,6 +57,8 @@
 // |---------------------|------------------------------------------------------------------|
 // | vertex_corrections  | bake.vertex_corrections: 1 builds and reads the field (impulse)   |
 // | kFieldStride        | 2: the prepass runs every second texel in x and y                |
+// | kFieldMaxBoost      | 3: with texels reading it, x up to 3 paths where few computed    |
+// |                     | texels share a texel's mean (9 / their count; statues, strips)   |
 // | kFieldPathFraction  | 0.5: ceil(spp x texel_mc_rate x 0.5) paths (1024 spp: 11); 2.5   |
 // |                     | when the texels read it too (texel_terms = field: 64 spp, 4)     |
 // | straddle rays       | 4 a texel, 0.71 / density long: geometry crossing the footprint   |
@@ -147,6 +149,8 @@ class VertexCorrectionField {
     long rays() const { return rays_; }
     // Texels whose prepass ran (the others took their neighbours' mean).
     long computed_texels() const { return computed_; }
+    // Their paths: paths_per_texel() each, more where few computed texels share their surface.
+    long paths_run() const { return paths_run_; }
     // Valid texels whose footprint geometry crosses: a lookup there casts a ray to the texel's
     // centre and ignores the field when something is in between.
     long straddling_texels() const { return straddling_; }
@@ -213,14 +217,18 @@ class VertexCorrectionField {
     // The prepass of one map (its texels' terms) and their packing (returns the valid
     // straddling texels).
     struct MapTerms;
+    struct PrepassCounts {
+        std::atomic<long> rays{0}, texels{0}, paths{0};
+    };
     MapTerms estimate_map(const RayScene& rays, const BakeEstimator& estimator,
                           const ObjectLightmap& map, size_t mi, uint64_t key, int seed,
-                          std::atomic<long>& rays_cast, std::atomic<long>& computed) const;
+                          PrepassCounts& counts) const;
     static long pack_map(const ObjectLightmap& map, const MapTerms& terms, int paths,
                          bool corrections_drawn, PackedMap& packed);
     int paths_ = 0;
     long rays_ = 0;
-    long computed_ = 0;
+    long computed_ = 0, paths_run_ = 0;
+    float max_boost_ = 1.0f;  // the most paths_ is raised by where few texels share a mean
     long straddling_ = 0;
     const RayScene* scene_ = nullptr;
     bool surface_light_ = false;
