@@ -572,6 +572,35 @@ TEST(Bake, TexelsReadingTheFieldAreWhatTheBakeStoredAndTheirPathsSaySo) {
     EXPECT_GE(added, checked / 2);  // the field brought the lit medium and the walk's light
 }
 
+// The field's prepass decides a texel's side of the shadows among its neighbours by
+// fixed_light_shadows (its shadow rays alone): the shadows its first path learns, on every
+// floor texel, the box's shadow and the box's own texels below the lamp's horizon included.
+TEST(Bake, FixedLightShadowsAreWhatTheFirstPathLearns) {
+    Fixture f(kFloorAndBoxByALampInFog);
+    const ImpulseTables& tables = test_support::shared_impulse_tables();
+    const BakeSettings s = small_texel_bake();
+    const LightmapBaker baker(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
+    const BakeEstimator estimator(*f.rays, f.media, &tables, BakeMethod::Impulse, s);
+    int checked = 0, shadowed = 0;
+    for (const ObjectLightmap& map : baker.lightmaps())
+        for (size_t i = 0; i < map.texels.size(); ++i) {
+            const LightmapTexel& t = map.texels[i];
+            if (t.state != TexelState::Valid) continue;
+            BakeCounters counters;
+            BakeEstimator::FixedDirect fixed;
+            CounterRng rng(1, 2, i, 0);
+            estimator.estimate(t.position, t.normal, t.albedo, rng, counters, &fixed);
+            ASSERT_TRUE(fixed.known);
+            const uint64_t rays = estimator.fixed_light_shadows(t.position, t.normal, counters);
+            EXPECT_EQ(rays, fixed.shadows) << "texel " << i;
+            ++checked;
+            shadowed += fixed.shadows != 0;
+        }
+    EXPECT_GT(checked, 200);
+    EXPECT_GT(shadowed, 20);
+    EXPECT_LT(shadowed, checked - 20);
+}
+
 // With texels reading the field, a computed texel whose surface holds few of the prepass's
 // lattice texels within its mean's reach (the box's 4 x 4-texel faces; chart edges) runs up to
 // kFieldMaxBoost (3) times the paths: its mean rests on about as many paths as a texel's amid

@@ -237,16 +237,39 @@ void BakeEstimator::set_vertex_corrections(const VertexCorrectionField* field) {
                          settings_.lit_medium_depth >= 0 && prepass_surface_depth_ < 0;
 }
 
+bool BakeEstimator::seen(const EmitterSample& s, const vec3& p, const vec3& n,
+                         BakeCounters& counters) const {
+    // Below the horizon the segment to the emitter enters the receiver's own surface at once:
+    // no ray is cast, and like an occluded one the connection brings no direct light; the
+    // light scattered by the lit medium around the receiver is lit_medium_single's.
+    return !s.behind && glm::dot(n, s.dir) > 0.0f && visible(p, n, s.dir, s.distance, counters);
+}
+
+uint64_t BakeEstimator::fixed_light_shadows(const vec3& p, const vec3& n,
+                                            BakeCounters& counters) const {
+    // The point and directional lights as sample_emitters makes them (no random numbers).
+    uint64_t shadows = 0;
+    const std::vector<Light>& lights = scene_.scene().lights;
+    for (size_t index = 0; index < lights.size(); ++index) {
+        const Light& light = lights[index];
+        if (light.type != LightType::Point && light.type != LightType::Directional) continue;
+        const LightSample ls = sample_light(light, p, vec2(0.0f));
+        if (!ls.valid) continue;
+        EmitterSample s;
+        s.light = int(index);
+        s.dir = ls.direction;
+        s.distance = ls.distance;
+        if (!seen(s, p, n, counters)) shadows |= shadow_bit(s.light);
+    }
+    return shadows;
+}
+
 bool BakeEstimator::direct_light(const EmitterSample& s, const vec3& p, const vec3& n,
                                  float albedo_lum, CounterRng& rng, BakeCounters& counters,
                                  IrradianceParts& parts, OccludedConnection* occluded,
                                  bool no_multiple) const {
     const float cos_x = glm::dot(n, s.dir);
-    const bool above = !s.behind && cos_x > 0.0f;
-    // Below the horizon the segment to the emitter enters the receiver's own surface at once:
-    // no ray is cast, and like an occluded one the connection brings no direct light; the
-    // light scattered by the lit medium around the receiver is lit_medium_single's.
-    if (!above || !visible(p, n, s.dir, s.distance, counters)) {
+    if (!seen(s, p, n, counters)) {
         if (!scatters_ || !occluded) return false;
         occluded->occluded = true;
         // Behind an area light the tables have no response (they are of its front).

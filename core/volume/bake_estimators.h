@@ -254,6 +254,9 @@ class BakeEstimator {
 
     BakeMethod method() const { return method_; }
     const BakeSettings& settings() const { return settings_; }
+    // The shadow_bit of every point and directional light (p, n) does not see: what a first
+    // path learns in FixedDirect::shadows, for the shadow rays alone.
+    uint64_t fixed_light_shadows(const vec3& p, const vec3& n, BakeCounters& counters) const;
 
     // Incident radiance at a probe p as order-3 SH (9 RGB coefficients per part): one path.
     struct ProbeParts {
@@ -541,6 +544,8 @@ class BakeEstimator {
                                                    float cos_light);
     bool visible(const vec3& from, const vec3& n, const vec3& dir, double distance,
                  BakeCounters& counters) const;
+    // Whether (p, n) sees emitter sample s: above its horizon, in front of it, unoccluded.
+    bool seen(const EmitterSample& s, const vec3& p, const vec3& n, BakeCounters& counters) const;
     vec3 origin(const vec3& p, const vec3& n) const;
     // Walks aim some directions past point lights (volume/near_light_directions.h).
     bool aims_at_point_lights() const;
