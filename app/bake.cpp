@@ -92,8 +92,10 @@ ReferenceLightmap read_reference(const std::vector<std::string>& dirs, const std
     return r;
 }
 
+// `irradiance` receives the lm_irradiance measure (error_over_lightmaps combines them).
 json error_against(const std::vector<std::string>& reference_dirs, const std::string& name,
-                   const LayerSet& test, const std::vector<uint8_t>& shadowed) {
+                   const LayerSet& test, const std::vector<uint8_t>& shadowed,
+                   LightmapError* irradiance) {
     const ReferenceLightmap ref = read_reference(reference_dirs, name);
     const LayerSet* half = ref.half ? &*ref.half : nullptr;
     json out = json::object();
@@ -103,6 +105,7 @@ json error_against(const std::vector<std::string>& reference_dirs, const std::st
         constexpr size_t kWorstTexels = 8;
         const LightmapError e =
             compare_lightmaps(test, ref.layers, layer, nullptr, kWorstTexels, half);
+        if (std::string(layer) == "lm_irradiance") *irradiance = e;
         json worst = json::array();
         for (const TexelError& t : e.worst)
             worst.push_back({{"x", t.x},
@@ -133,31 +136,15 @@ json error_against(const std::vector<std::string>& reference_dirs, const std::st
 
 // The error of the whole bake: each lightmap's lm_irradiance measures, texel-weighted (the
 // lit ones by their lit texels), with the reference's own noise when it came in halves.
-json error_over_lightmaps(const json& maps) {
-    double relmse = 0.0, lit = 0.0, noise = 0.0, noise_lit = 0.0;
-    long texels = 0, texels_lit = 0;
-    bool halves = false;
-    for (const json& m : maps) {
-        if (!m.contains("error") || !m["error"].contains("lm_irradiance")) continue;
-        const json& e = m["error"]["lm_irradiance"];
-        const long n = e["texels"].get<long>(), nl = e["texels_lit"].get<long>();
-        relmse += e["relmse"].get<double>() * double(n);
-        lit += e["relmse_lit"].get<double>() * double(nl);
-        if (e.contains("reference_noise")) {
-            halves = true;
-            noise += e["reference_noise"].get<double>() * double(n);
-            noise_lit += e["reference_noise_lit"].get<double>() * double(nl);
-        }
-        texels += n;
-        texels_lit += nl;
-    }
-    json out = {{"texels", texels},
-                {"texels_lit", texels_lit},
-                {"relmse", texels > 0 ? relmse / double(texels) : 0.0},
-                {"relmse_lit", texels_lit > 0 ? lit / double(texels_lit) : 0.0}};
-    if (halves) {
-        out["reference_noise"] = texels > 0 ? noise / double(texels) : 0.0;
-        out["reference_noise_lit"] = texels_lit > 0 ? noise_lit / double(texels_lit) : 0.0;
+json error_over_lightmaps(const std::vector<LightmapError>& maps) {
+    const LightmapError e = combine_lightmap_errors(maps);
+    json out = {{"texels", e.texels},
+                {"texels_lit", e.texels_lit},
+                {"relmse", e.relmse},
+                {"relmse_lit", e.relmse_lit}};
+    if (e.reference_noise >= 0.0) {
+        out["reference_noise"] = e.reference_noise;
+        out["reference_noise_lit"] = e.reference_noise_lit;
     }
     return {{"lm_irradiance", out}};
 }
@@ -436,6 +423,7 @@ int run_bake(const BakeArgs& args) {
         report["overhead"] = stats.bake_ms / surface.stats().bake_ms;
     }
     json maps = json::array();
+    std::vector<LightmapError> errors;  // lm_irradiance's, per lightmap
     const BakeKeyLight key = bake_key_light(rays);
     const json bake_provenance =
         output_provenance(scene, to_string(method), group.to_json(), long(settings.seed));
@@ -460,13 +448,14 @@ int run_bake(const BakeArgs& args) {
                       {"texel_density", map.texel_density},
                       {"texels_valid", long(map.count(TexelState::Valid))},
                       {"texels_inside_geometry", long(map.count(TexelState::InsideGeometry))}};
-        if (!args.reference.empty())
-            entry["error"] =
-                error_against(args.reference, name, layers, shadowed_texels(rays, map, key));
+        if (!args.reference.empty()) {
+            entry["error"] = error_against(args.reference, name, layers,
+                                           shadowed_texels(rays, map, key), &errors.emplace_back());
+        }
         maps.push_back(entry);
     }
     report["lightmaps"] = maps;
-    if (!args.reference.empty()) report["error"] = error_over_lightmaps(maps);
+    if (!args.reference.empty()) report["error"] = error_over_lightmaps(errors);
     if (!baker.probes().empty()) {
         write_text_atomically(fs::path(args.out) / "probes.json",
                               baker.probes_json().dump(1) + "\n");

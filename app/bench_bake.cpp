@@ -59,18 +59,11 @@ struct RelMse {
     double all = 0.0, lit = 0.0;
 };
 RelMse relmse_against(const LightmapBaker& baker, const LightmapBaker& reference) {
-    double sum = 0.0, sum_lit = 0.0;
-    long texels = 0, texels_lit = 0;
-    for (size_t i = 0; i < baker.lightmaps().size(); ++i) {
-        const LightmapError e =
-            compare_lightmaps(baker.layers(i), reference.layers(i), "lm_irradiance");
-        sum += e.relmse * double(e.texels);
-        texels += e.texels;
-        sum_lit += e.relmse_lit * double(e.texels_lit);
-        texels_lit += e.texels_lit;
-    }
-    return {texels > 0 ? sum / double(texels) : 0.0,
-            texels_lit > 0 ? sum_lit / double(texels_lit) : 0.0};
+    std::vector<LightmapError> maps;
+    for (size_t i = 0; i < baker.lightmaps().size(); ++i)
+        maps.push_back(compare_lightmaps(baker.layers(i), reference.layers(i), "lm_irradiance"));
+    const LightmapError e = combine_lightmap_errors(maps);
+    return {e.relmse, e.relmse_lit};
 }
 
 std::vector<CurvePoint> curve(LightmapBaker& baker, const LightmapBaker& reference, int max_spp) {

@@ -186,6 +186,29 @@ TEST(LightmapMeasures, WorstTexelsAreTheLargestRelMseTerms) {
     EXPECT_NEAR(e.relmse_lit, 3 * 0.25 / (1.0 + eps * eps) / (3.0 * (w * h - 1)), 1e-12);
 }
 
+// A bake's error from its lightmaps' (combine_lightmap_errors): texel-weighted relmse, lit
+// texels' by their count, squares for rmse; the reference's noise only where every measured
+// part knows it; a part without texels left out.
+TEST(LightmapMeasures, ABakesErrorWeighsItsLightmapsByTheirTexels) {
+    LightmapError a, b, empty;
+    a.relmse = 0.5, a.relmse_lit = 0.1, a.rmse = 2.0, a.texels = 100, a.texels_lit = 10;
+    a.reference_noise = 0.01, a.reference_noise_lit = 0.02;
+    b.relmse = 2.0, b.relmse_lit = 0.4, b.rmse = 1.0, b.texels = 300, b.texels_lit = 30;
+    b.reference_noise = 0.03, b.reference_noise_lit = 0.04;
+    const LightmapError e = combine_lightmap_errors({a, empty, b});
+    EXPECT_EQ(e.texels, 400);
+    EXPECT_EQ(e.texels_lit, 40);
+    EXPECT_DOUBLE_EQ(e.relmse, (0.5 * 100 + 2.0 * 300) / 400.0);
+    EXPECT_DOUBLE_EQ(e.relmse_lit, (0.1 * 10 + 0.4 * 30) / 40.0);
+    EXPECT_DOUBLE_EQ(e.rmse, std::sqrt((4.0 * 100 + 1.0 * 300) / 400.0));
+    EXPECT_DOUBLE_EQ(e.reference_noise, (0.01 * 100 + 0.03 * 300) / 400.0);
+    EXPECT_DOUBLE_EQ(e.reference_noise_lit, (0.02 * 10 + 0.04 * 30) / 40.0);
+    EXPECT_TRUE(std::isnan(e.rel_l2));
+    b.reference_noise = b.reference_noise_lit = -1.0;  // one reference for b
+    EXPECT_EQ(combine_lightmap_errors({a, b}).reference_noise, -1.0);
+    EXPECT_EQ(combine_lightmap_errors({}).texels, 0);
+}
+
 // A reference given as two independent halves (compare_lightmaps' ref_half): the reference is
 // their mean and reference_noise estimates the relMSE its own noise adds, texel by texel from
 // the halves' difference ((a - b)^2 / 4, the variance of the mean of two). Synthetic lightmaps
