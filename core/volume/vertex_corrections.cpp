@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdlib>
 
 #include "volume/bake_estimators.h"
 #include "volume/lightmap_baker.h"
@@ -47,8 +46,8 @@ constexpr double kFieldPathFractionForTexels = 2.5;
 // 6.4 / 15.7 s of a 20-34 s bake; the low preset (4 texels/unit, 16 spp) 0.037 / 0.031 / 0.029,
 // prepass 3.9 / 5.5 / 8.5 s; all texels' relMSE (their darkest, a few fireflies) 0.317 / 0.314 /
 // 0.313. Without texels reading it (deeper vertices land anywhere on a surface) no boost.
-constexpr int kFullLattice =
-    (2 * (kFieldStride / kFieldStride) + 1) * (2 * (kFieldStride / kFieldStride) + 1);
+constexpr int kFullLattice = 9;  // 3 x 3: the mean's radius is kFieldStride, the lattice's step
+static_assert(kFieldStride == 2, "kFullLattice counts a stride-2 lattice within 2 texels");
 constexpr float kFieldMaxBoost = 3.0f;
 
 // Each computed texel's terms become the mean of the computed texels within kFieldStride of
