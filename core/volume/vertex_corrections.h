@@ -8,7 +8,9 @@
 //
 // Before the first pass the baker estimates the texels' Monte Carlo terms (a prepass: every
 // path runs them, no indirect segment; every second texel in x and y, the others the mean of
-// those around them on their surface; ceil(spp x texel_mc_rate / 2) paths a texel): the
+// those around them on their surface and their side of the shadows, or themselves where none
+// is; ceil(spp x texel_mc_rate / 2) paths a texel, x 2.5 and up to x 3 more where few texels
+// share a mean when the texels read it too, see the table): the
 // emitters' (lit medium, the walk's multiple) and, apart, the walk's light of other surfaces;
 // the single-scattering corrections of unoccluded connections as their ratio to the tables'
 // single scattering of those connections, which a deeper vertex multiplies by its own tables'
