@@ -617,8 +617,8 @@ TEST(Bake, FieldPrepassRaisesThePathsWhereFewTexelsShareAMean) {
     int floor_most = 0, box_most = 0;
     for (size_t m = 0; m < maps.size(); ++m)
         for (size_t i = 0; i < maps[m].texels.size(); ++i)
-            (m == 0 ? floor_most : box_most) = std::max(
-                m == 0 ? floor_most : box_most, texel_filter_capacity_on_lattice(maps[m], i, 2, 2));
+            (m == 0 ? floor_most : box_most) =
+                std::max(m == 0 ? floor_most : box_most, texel_filter_capacity(maps[m], i, 2, 2));
     EXPECT_EQ(floor_most, 9);
     EXPECT_LE(box_most, 5);
     for (TexelTerms terms : {TexelTerms::Field, TexelTerms::Own}) {

@@ -42,15 +42,7 @@ std::vector<size_t> texel_filter_neighbours(const ObjectLightmap& map,
     return out;
 }
 
-int texel_filter_capacity(const ObjectLightmap& map, size_t i, int radius) {
-    int count = 0;
-    if (map.texels[i].state != TexelState::Valid) return count;
-    for_each_in_window(map, i, radius,
-                       [&](size_t j) { count += on_surface_of(map, i, j, radius); });
-    return count;
-}
-
-int texel_filter_capacity_on_lattice(const ObjectLightmap& map, size_t i, int radius, int stride) {
+int texel_filter_capacity(const ObjectLightmap& map, size_t i, int radius, int stride) {
     int count = 0;
     if (map.texels[i].state != TexelState::Valid) return count;
     const size_t w = size_t(map.width);

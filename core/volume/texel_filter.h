@@ -83,12 +83,10 @@ std::vector<IrradianceParts> filter_texel_sums(
 IrradianceParts mean_of_texels(const std::vector<IrradianceParts>& sums,
                                const std::vector<size_t>& near);
 // How many texels texel i's window can average at most: the valid ones within `radius` on its
-// surface (before the bake's shadow and light-level tests).
-int texel_filter_capacity(const ObjectLightmap& map, size_t i, int radius);
-// The same for the vertex correction field's prepass filter (vertex_corrections.cpp), which
-// averages only the texels the prepass ran: those of the lattice of every `stride`-th texel in
-// x and y, and texel i itself.
-int texel_filter_capacity_on_lattice(const ObjectLightmap& map, size_t i, int radius, int stride);
+// surface (before the bake's shadow and light-level tests). `stride` > 1: for the vertex
+// correction field's prepass filter (vertex_corrections.cpp), which averages only the texels
+// the prepass ran: those of the lattice of every stride-th texel in x and y, and texel i.
+int texel_filter_capacity(const ObjectLightmap& map, size_t i, int radius, int stride = 1);
 // The rate at which each texel runs its Monte Carlo terms: bake.texel_mc_rate x (2r + 1)^2 /
 // its capacity (at most kMaxMcRateBoost times the rate, at most 1), so that a texel's filtered
 // terms rest on about as many samples as a texel's amid a wide flat chart. At the plain rate

@@ -226,7 +226,7 @@ VertexCorrectionField::MapTerms VertexCorrectionField::estimate_map(
     auto run = [&](size_t r) {
         const size_t i = m.texel[r];
         const LightmapTexel& t = map.texels[i];
-        const int capacity = texel_filter_capacity_on_lattice(map, i, kFieldStride, kFieldStride);
+        const int capacity = texel_filter_capacity(map, i, kFieldStride, kFieldStride);
         const float boost =
             std::min(max_boost_, float(kFullLattice) / float(std::max(1, capacity)));
         const int paths = std::max(paths_, int(std::lround(float(paths_) * boost)));
